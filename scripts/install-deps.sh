@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# Installs the Debian packages placedb builds, tests and runs with.
+# Idempotent: when every package is already present it changes nothing and asks no registry.
+# Run as root (or with sudo available). Usage: scripts/install-deps.sh [--fuzz]
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config
+  libsqlite3-dev sqlite3
+  libopencv-dev libflann-dev liblz4-dev libeigen3-dev
+  libboost-serialization-dev
+  libgtest-dev libgmock-dev
+  nlohmann-json3-dev libcli11-dev libfmt-dev
+  python3
+)
+if [[ "${1:-}" == "--fuzz" ]]; then
+  packages+=(clang-14 libclang-rt-14-dev)
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [[ ${#missing[@]} -eq 0 ]]; then
+  exit 0
+fi
+
+echo "install-deps: installing ${missing[*]}" >&2
+SUDO=""
+if [[ $(id -u) -ne 0 ]]; then
+  if command -v sudo >/dev/null 2>&1; then SUDO="sudo"; else
+    echo "install-deps: missing packages (${missing[*]}) and not root; run as root" >&2
+    exit 1
+  fi
+fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
