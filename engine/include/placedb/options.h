@@ -1,0 +1,66 @@
+#pragma once
+// Every setting of the engine, typed, with its published or measured default.
+// The same settings travel as text (`--set key=value`, config files, the map's settings table):
+// Options::fromSettings() validates them, Options::toSettings() writes them back.
+#include <map>
+#include <string>
+#include <vector>
+
+namespace placedb {
+
+struct Options {
+  // --- features (SPEC §1) ---
+  std::string extractor = "surf";      // surf | sift | kaze
+  double hessian_threshold = 150;      // SURF fast-Hessian threshold
+  int octaves = 4;                     // SURF octaves
+  int intervals = 2;                   // SURF intervals (layers) per octave
+  bool upright = false;                // U-SURF: no orientation
+  int max_features = 400;              // strongest kept; 0 keeps all
+  double min_response = 0;             // features under this response are dropped
+  double bad_ratio = 0.25;             // fewer features than this x running mean: a bad frame
+
+  // --- vocabulary (SPEC §2) ---
+  std::string word_rule = "greedy";    // greedy | nndr
+  std::string distance_unit = "squared";  // squared | euclidean: unit of t_nd1, t_nd2 and the ratio
+  double t_nndr = 0.8;
+  double t_nd1 = 0.001;
+  double t_nd2 = 0.08;
+  int kd_trees = 4;
+  int kd_checks = 64;
+
+  // --- memory (SPEC §5, §7) ---
+  int stm_size = 10;                   // newest locations that are never loop candidates
+  double t_sim = 0.2;                  // merge into the previous location above this similarity
+  int wm_max = 0;                      // WM size limit, 0 = unbounded
+  double t_time_ms = 0;                // frame-time limit that triggers transfer, 0 = off
+  int max_retrieved = 2;               // LTM neighbours brought back per frame
+  int wm_immune_newest = 0;            // newest WM locations never transferred (0 = stm_size)
+
+  // --- Bayes filter and decision (SPEC §6) ---
+  double t_loop = 0.11;
+  std::string decision_rule = "rtabmap";  // rtabmap (score >= t_loop and ratio test) | paper
+  double loop_ratio = 0.9;             // rtabmap rule: reject when score < ratio x previous score
+  double prediction_sigma = 1.6;
+  int prediction_links = 16;
+
+  // Throws placedb::Error(kInvalidArgument) naming the key and the valid values or range;
+  // an unknown key is refused with the list of known ones.
+  static Options fromSettings(const std::map<std::string, std::string>& settings,
+                              const Options& base = Options());
+  std::map<std::string, std::string> toSettings() const;
+  void validate() const;
+
+  // Paper 000, table 4: T_sim 0.2, T_loop 0.11, T_NNDR 0.8, T_ND1 0.001, T_ND2 0.08,
+  // T_time 0.7 s (1 Hz), the paper's decision rule.
+  static Options paperPreset();
+
+  struct SettingInfo {
+    std::string key;
+    std::string default_value;
+    std::string valid;        // "0..1", "greedy|nndr", ...
+    std::string description;
+  };
+  static std::vector<SettingInfo> catalogue();
+};
+
+}  // namespace placedb

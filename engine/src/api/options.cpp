@@ -1,0 +1,206 @@
+// The settings catalogue: one row per key, shared by parsing, printing, validation and --help.
+#include "placedb/options.h"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <functional>
+#include <limits>
+
+#include "placedb/error.h"
+
+namespace placedb {
+namespace {
+
+struct Row {
+  const char* key;
+  const char* valid;
+  const char* description;
+  std::function<std::string(const Options&)> get;
+  std::function<void(Options&, const std::string&)> set;  // throws with the reason
+  std::function<bool(const Options&)> ok;                // range check on the typed value
+};
+
+[[noreturn]] void refuse(const std::string& key, const std::string& value, const char* valid) {
+  throw Error(ErrorCode::kInvalidArgument,
+              fmt::format("setting {}={} is out of range: valid values are {}", key, value, valid));
+}
+
+double parseDouble(const std::string& key, const std::string& text, const char* valid) {
+  errno = 0;
+  char* end = nullptr;
+  double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || errno != 0 || v != v)
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("setting {}={} is not a number (valid: {})", key, text, valid));
+  return v;
+}
+
+int parseInt(const std::string& key, const std::string& text, const char* valid) {
+  errno = 0;
+  char* end = nullptr;
+  long v = std::strtol(text.c_str(), &end, 10);
+  if (text.empty() || end != text.c_str() + text.size() || errno != 0 ||
+      v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max())
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("setting {}={} is not an integer (valid: {})", key, text, valid));
+  return static_cast<int>(v);
+}
+
+bool parseBool(const std::string& key, const std::string& text) {
+  if (text == "true" || text == "1" || text == "yes" || text == "on") return true;
+  if (text == "false" || text == "0" || text == "no" || text == "off") return false;
+  throw Error(ErrorCode::kInvalidArgument,
+              fmt::format("setting {}={} is not a boolean (valid: true|false)", key, text));
+}
+
+std::string formatDouble(double v) { return fmt::format("{}", v); }
+
+// Row builders keep the table below one line of intent per setting.
+Row real(const char* key, double Options::*m, double lo, double hi, const char* valid,
+         const char* description) {
+  return {key, valid, description, [m](const Options& o) { return formatDouble(o.*m); },
+          [m, key, valid](Options& o, const std::string& t) { o.*m = parseDouble(key, t, valid); },
+          [m, lo, hi](const Options& o) { return o.*m >= lo && o.*m <= hi; }};
+}
+
+Row integer(const char* key, int Options::*m, int lo, int hi, const char* valid,
+            const char* description) {
+  return {key, valid, description, [m](const Options& o) { return std::to_string(o.*m); },
+          [m, key, valid](Options& o, const std::string& t) { o.*m = parseInt(key, t, valid); },
+          [m, lo, hi](const Options& o) { return o.*m >= lo && o.*m <= hi; }};
+}
+
+Row boolean(const char* key, bool Options::*m, const char* description) {
+  return {key, "true|false", description,
+          [m](const Options& o) { return std::string(o.*m ? "true" : "false"); },
+          [m, key](Options& o, const std::string& t) { o.*m = parseBool(key, t); },
+          [](const Options&) { return true; }};
+}
+
+Row choice(const char* key, std::string Options::*m, std::vector<std::string> values,
+           const char* valid, const char* description) {
+  auto allowed = [values](const std::string& v) {
+    for (const auto& a : values)
+      if (a == v) return true;
+    return false;
+  };
+  return {key, valid, description, [m](const Options& o) { return o.*m; },
+          [m](Options& o, const std::string& t) { o.*m = t; },
+          [m, allowed](const Options& o) { return allowed(o.*m); }};
+}
+
+const std::vector<Row>& table() {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  static const std::vector<Row> rows = {
+      choice("extractor", &Options::extractor, {"surf", "sift", "kaze"}, "surf|sift|kaze",
+             "feature extractor; a map keeps the one it was made with"),
+      real("hessian_threshold", &Options::hessian_threshold, 0, kInf, ">= 0",
+           "SURF fast-Hessian threshold: lower finds more, weaker features"),
+      integer("octaves", &Options::octaves, 1, 8, "1..8", "SURF octaves"),
+      integer("intervals", &Options::intervals, 1, 8, "1..8", "SURF intervals per octave"),
+      boolean("upright", &Options::upright, "U-SURF: skip orientation (camera never rolls)"),
+      integer("max_features", &Options::max_features, 0, 100000, "0..100000",
+              "strongest features kept per image, 0 = all"),
+      real("min_response", &Options::min_response, 0, kInf, ">= 0",
+           "features with a weaker detector response are dropped"),
+      real("bad_ratio", &Options::bad_ratio, 0, 1, "0..1",
+           "an image with fewer features than this x the running mean is bad (never a location)"),
+      choice("word_rule", &Options::word_rule, {"greedy", "nndr"}, "greedy|nndr",
+             "word creation rule: greedy (paper 000, algorithm 3) or NNDR (algorithms 1-2)"),
+      choice("distance_unit", &Options::distance_unit, {"squared", "euclidean"},
+             "squared|euclidean", "unit of t_nd1, t_nd2 and the ratio test (FLANN's is squared)"),
+      real("t_nndr", &Options::t_nndr, 0, 1, "0..1", "nearest/second-nearest ratio threshold"),
+      real("t_nd1", &Options::t_nd1, 0, kInf, ">= 0", "greedy: below this ND a feature takes its word"),
+      real("t_nd2", &Options::t_nd2, 0, kInf, ">= 0", "greedy: above this ND a feature makes a word"),
+      integer("kd_trees", &Options::kd_trees, 1, 64, "1..64", "FLANN randomized kd-trees"),
+      integer("kd_checks", &Options::kd_checks, 1, 1 << 20, "1..1048576",
+              "FLANN leaves checked per query (recall vs time)"),
+      integer("stm_size", &Options::stm_size, 1, 10000, "1..10000",
+              "short-term memory: newest locations, never loop candidates"),
+      real("t_sim", &Options::t_sim, 0, 1, "0..1",
+           "merge a new location into the previous one above this similarity"),
+      integer("wm_max", &Options::wm_max, 0, 100000000, "0..1e8",
+              "working-memory size that triggers transfer to LTM, 0 = unbounded"),
+      real("t_time_ms", &Options::t_time_ms, 0, kInf, ">= 0",
+           "frame time that triggers transfer to LTM, in ms, 0 = off"),
+      integer("max_retrieved", &Options::max_retrieved, 0, 1000, "0..1000",
+              "LTM neighbours of the best hypothesis brought back per frame"),
+      integer("wm_immune_newest", &Options::wm_immune_newest, 0, 100000, "0..100000",
+              "newest WM locations never transferred, 0 = stm_size"),
+      real("t_loop", &Options::t_loop, 0, 1, "0..1", "loop-closure acceptance threshold"),
+      choice("decision_rule", &Options::decision_rule, {"rtabmap", "paper"}, "rtabmap|paper",
+             "rtabmap: 1-p(new) >= t_loop and ratio test; paper: p(new) < t_loop"),
+      real("loop_ratio", &Options::loop_ratio, 0, 1, "0..1",
+           "rtabmap rule: reject when the score falls under this x the previous frame's"),
+      real("prediction_sigma", &Options::prediction_sigma, 0.01, 100, "0.01..100",
+           "Gaussian spread of the prediction over neighbouring locations, in links"),
+      integer("prediction_links", &Options::prediction_links, 0, 1000, "0..1000",
+              "links from a location that its prediction reaches"),
+  };
+  return rows;
+}
+
+const Row* find(const std::string& key) {
+  for (const auto& r : table())
+    if (key == r.key) return &r;
+  return nullptr;
+}
+
+std::string knownKeys() {
+  std::string keys;
+  for (const auto& r : table()) keys += (keys.empty() ? "" : ", ") + std::string(r.key);
+  return keys;
+}
+
+}  // namespace
+
+Options Options::fromSettings(const std::map<std::string, std::string>& settings,
+                              const Options& base) {
+  Options o = base;
+  for (const auto& [key, value] : settings) {
+    const Row* row = find(key);
+    if (!row)
+      throw Error(ErrorCode::kInvalidArgument,
+                  fmt::format("unknown setting '{}'; known settings: {}", key, knownKeys()));
+    row->set(o, value);
+    if (!row->ok(o)) refuse(key, value, row->valid);
+  }
+  return o;
+}
+
+std::map<std::string, std::string> Options::toSettings() const {
+  std::map<std::string, std::string> out;
+  for (const auto& r : table()) out[r.key] = r.get(*this);
+  return out;
+}
+
+void Options::validate() const {
+  for (const auto& r : table())
+    if (!r.ok(*this)) refuse(r.key, r.get(*this), r.valid);
+  if (t_nd1 > t_nd2)
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("t_nd1 ({}) must not exceed t_nd2 ({})", t_nd1, t_nd2));
+}
+
+Options Options::paperPreset() {
+  Options o;
+  o.t_sim = 0.2;
+  o.t_loop = 0.11;
+  o.t_nndr = 0.8;
+  o.t_nd1 = 0.001;
+  o.t_nd2 = 0.08;
+  o.t_time_ms = 700;
+  o.decision_rule = "paper";
+  return o;
+}
+
+std::vector<Options::SettingInfo> Options::catalogue() {
+  std::vector<SettingInfo> out;
+  Options defaults;
+  for (const auto& r : table()) out.push_back({r.key, r.get(defaults), r.valid, r.description});
+  return out;
+}
+
+}  // namespace placedb

@@ -1,0 +1,2 @@
+target_sources(placedb_engine PRIVATE
+  ${CMAKE_CURRENT_LIST_DIR}/options.cpp)

@@ -1,0 +1,185 @@
+-- placedb map schema, version 1.
+-- The migration runner wraps this script in one transaction and then sets
+-- PRAGMA user_version = 1 and PRAGMA application_id (the placedb mark).
+
+-- One run of the engine over one image source.
+CREATE TABLE sessions (
+  id INTEGER PRIMARY KEY,
+  started_at TEXT NOT NULL,          -- ISO 8601 UTC
+  ended_at TEXT,                     -- NULL while running or after a crash
+  clean_close INTEGER NOT NULL DEFAULT 0 CHECK (clean_close IN (0, 1)),
+  software_version TEXT NOT NULL,
+  source TEXT NOT NULL
+);
+
+-- The settings a session ran with, as text.
+CREATE TABLE settings (
+  session_id INTEGER NOT NULL REFERENCES sessions (id),
+  key TEXT NOT NULL,
+  value TEXT NOT NULL,
+  PRIMARY KEY (session_id, key)
+) WITHOUT ROWID;
+
+-- Every input frame, including the ones rejected as bad.
+CREATE TABLE frames (
+  id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions (id),
+  source_index INTEGER NOT NULL,
+  source_path TEXT,
+  outcome INTEGER NOT NULL CHECK (outcome IN (0, 1, 2)),  -- 0 new location, 1 merged, 2 bad
+  location_id INTEGER REFERENCES locations (id) ON DELETE SET NULL DEFERRABLE INITIALLY DEFERRED,
+  features_ms REAL,
+  quantisation_ms REAL,
+  likelihood_ms REAL,
+  filter_ms REAL,
+  memory_ms REAL,
+  storage_ms REAL,
+  total_ms REAL,
+  feature_count INTEGER,
+  words_created INTEGER,
+  vocabulary_size INTEGER,
+  wm_size INTEGER,
+  stm_size INTEGER,
+  mean_quantisation_error REAL,
+  UNIQUE (session_id, source_index)
+);
+CREATE INDEX frames_by_location ON frames (location_id);
+
+-- Places of the map. Ids are assigned by the engine.
+CREATE TABLE locations (
+  id INTEGER PRIMARY KEY,
+  session_id INTEGER NOT NULL REFERENCES sessions (id),
+  weight INTEGER NOT NULL DEFAULT 0,
+  tier INTEGER NOT NULL CHECK (tier IN (0, 1, 2)),  -- 0 STM, 1 WM, 2 LTM
+  created_frame INTEGER REFERENCES frames (id) DEFERRABLE INITIALLY DEFERRED
+);
+CREATE INDEX locations_by_tier ON locations (tier, weight);
+CREATE INDEX locations_by_session ON locations (session_id);
+
+-- Which frames a location stands for (several after STM merging).
+CREATE TABLE location_frames (
+  location_id INTEGER NOT NULL REFERENCES locations (id) ON DELETE CASCADE,
+  frame_id INTEGER NOT NULL REFERENCES frames (id) DEFERRABLE INITIALLY DEFERRED,
+  PRIMARY KEY (location_id, frame_id)
+) WITHOUT ROWID;
+CREATE INDEX location_frames_by_frame ON location_frames (frame_id);
+
+-- Vocabulary files imported into the map.
+CREATE TABLE vocabulary_imports (
+  id INTEGER PRIMARY KEY,
+  session_id INTEGER REFERENCES sessions (id),
+  file TEXT NOT NULL,
+  checksum TEXT NOT NULL,
+  word_count INTEGER NOT NULL,
+  mode TEXT NOT NULL CHECK (mode IN ('fixed', 'seed')),
+  imported_at TEXT NOT NULL          -- ISO 8601 UTC
+);
+
+-- Visual words. descriptor holds dim values of the given type, little-endian.
+CREATE TABLE words (
+  id INTEGER PRIMARY KEY,
+  created_frame INTEGER REFERENCES frames (id) DEFERRABLE INITIALLY DEFERRED,
+  vocabulary_import_id INTEGER REFERENCES vocabulary_imports (id),
+  descriptor_type INTEGER NOT NULL CHECK (descriptor_type IN (0, 1)),  -- 0 float32, 1 uint8
+  dim INTEGER NOT NULL CHECK (dim > 0),
+  descriptor BLOB NOT NULL
+    CHECK (length(descriptor) = dim * (CASE descriptor_type WHEN 0 THEN 4 ELSE 1 END))
+);
+CREATE INDEX words_by_created_frame ON words (created_frame);
+
+-- The signature of each location: one row per keypoint, in signature order.
+CREATE TABLE word_refs (
+  location_id INTEGER NOT NULL REFERENCES locations (id) ON DELETE CASCADE,
+  ordinal INTEGER NOT NULL,
+  word_id INTEGER NOT NULL REFERENCES words (id),
+  x REAL NOT NULL,
+  y REAL NOT NULL,
+  size REAL NOT NULL,
+  angle REAL NOT NULL,
+  response REAL NOT NULL,
+  PRIMARY KEY (location_id, ordinal)
+) WITHOUT ROWID;
+-- The inverted index: locations that contain a word.
+CREATE INDEX word_refs_by_word ON word_refs (word_id, location_id);
+
+-- Graph edges, stored once per unordered pair and type (location_a < location_b).
+CREATE TABLE links (
+  location_a INTEGER NOT NULL REFERENCES locations (id) ON DELETE CASCADE,
+  location_b INTEGER NOT NULL REFERENCES locations (id) ON DELETE CASCADE,
+  type INTEGER NOT NULL CHECK (type IN (0, 1, 2)),  -- 0 neighbour, 1 loop closure, 2 merge
+  score REAL,
+  PRIMARY KEY (location_a, location_b, type),
+  CHECK (location_a < location_b)
+) WITHOUT ROWID;
+CREATE INDEX links_by_b ON links (location_b);
+
+-- The best loop-closure hypothesis of each frame.
+CREATE TABLE hypotheses (
+  frame_id INTEGER PRIMARY KEY REFERENCES frames (id) DEFERRABLE INITIALLY DEFERRED,
+  best_location_id INTEGER REFERENCES locations (id) ON DELETE SET NULL,
+  posterior REAL NOT NULL,
+  loop_probability REAL NOT NULL,
+  accepted INTEGER NOT NULL CHECK (accepted IN (0, 1)),
+  rejected_reason TEXT
+);
+
+-- Engine state needed for an exact resume.
+CREATE TABLE engine_state (
+  key TEXT PRIMARY KEY,
+  value BLOB
+) WITHOUT ROWID;
+
+-- The Bayes filter posterior after the last committed frame. location_id has no
+-- foreign key on purpose: ids <= 0 stand for the filter's virtual "new place".
+CREATE TABLE filter_posterior (
+  location_id INTEGER PRIMARY KEY,
+  probability REAL NOT NULL
+);
+
+-- Views for people reading a map with sqlite3.
+CREATE VIEW v_frames AS
+SELECT f.id AS frame_id, f.session_id, f.source_index, f.source_path,
+       CASE f.outcome WHEN 0 THEN 'new' WHEN 1 THEN 'merged' ELSE 'bad' END AS outcome,
+       f.location_id, f.feature_count, f.words_created, f.vocabulary_size, f.wm_size, f.stm_size,
+       f.mean_quantisation_error, f.features_ms, f.quantisation_ms, f.likelihood_ms, f.filter_ms,
+       f.memory_ms, f.storage_ms, f.total_ms
+FROM frames f;
+
+CREATE VIEW v_locations AS
+SELECT l.id AS location_id, l.session_id, l.weight,
+       CASE l.tier WHEN 0 THEN 'STM' WHEN 1 THEN 'WM' ELSE 'LTM' END AS tier,
+       l.created_frame,
+       (SELECT count(*) FROM word_refs r WHERE r.location_id = l.id) AS word_ref_count,
+       (SELECT count(*) FROM location_frames lf WHERE lf.location_id = l.id) AS frame_count
+FROM locations l;
+
+CREATE VIEW v_location_frames AS
+SELECT lf.location_id, lf.frame_id, f.session_id, f.source_index, f.source_path
+FROM location_frames lf JOIN frames f ON f.id = lf.frame_id;
+
+CREATE VIEW v_location_words AS
+SELECT location_id, word_id, count(*) AS occurrences
+FROM word_refs GROUP BY location_id, word_id;
+
+CREATE VIEW v_links AS
+SELECT location_a, location_b,
+       CASE type WHEN 0 THEN 'neighbour' WHEN 1 THEN 'loop_closure' ELSE 'merge' END AS type,
+       score
+FROM links;
+
+CREATE VIEW v_loop_closures AS
+SELECT k.location_a, k.location_b, k.score,
+       (SELECT min(fa.source_index) FROM location_frames lfa JOIN frames fa ON fa.id = lfa.frame_id
+         WHERE lfa.location_id = k.location_a) AS first_frame_a,
+       (SELECT min(fb.source_index) FROM location_frames lfb JOIN frames fb ON fb.id = lfb.frame_id
+         WHERE lfb.location_id = k.location_b) AS first_frame_b
+FROM links k WHERE k.type = 1;
+
+CREATE VIEW v_hypotheses AS
+SELECT h.frame_id, f.session_id, f.source_index, h.best_location_id, h.posterior,
+       h.loop_probability, h.accepted, h.rejected_reason
+FROM hypotheses h JOIN frames f ON f.id = h.frame_id;
+
+CREATE VIEW v_vocabulary_growth AS
+SELECT f.session_id, f.source_index, f.id AS frame_id, f.words_created, f.vocabulary_size
+FROM frames f;

@@ -1,0 +1,106 @@
+#pragma once
+// Plain records exchanged between the engine and the map database. Ids are SQLite integers.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace placedb::storage {
+
+enum class Tier : int { kSTM = 0, kWM = 1, kLTM = 2 };
+enum class FrameOutcome : int { kNewLocation = 0, kMerged = 1, kBad = 2 };
+enum class LinkType : int { kNeighbour = 0, kLoopClosure = 1, kMerge = 2 };
+enum class VocabularyMode : int { kFixed = 0, kSeed = 1 };
+// Same numbering as placedb::DescriptorType.
+enum class DescriptorKind : std::uint8_t { kFloat32 = 0, kBinary8U = 1 };
+
+struct SessionRecord {
+  std::int64_t id = 0;
+  std::string started_at;                // ISO 8601 UTC, set by the database
+  std::optional<std::string> ended_at;   // empty while running or after a crash
+  bool clean_close = false;
+  std::string software_version;
+  std::string source;
+};
+
+struct FrameTimings {  // milliseconds per stage
+  double features_ms = 0, quantisation_ms = 0, likelihood_ms = 0, filter_ms = 0, memory_ms = 0,
+         storage_ms = 0, total_ms = 0;
+};
+
+struct FrameStats {
+  std::int64_t feature_count = 0, words_created = 0, vocabulary_size = 0, wm_size = 0,
+               stm_size = 0;
+  double mean_quantisation_error = 0;
+};
+
+struct FrameRecord {
+  std::int64_t id = 0;  // 0 on insert: the database assigns it; otherwise used as given
+  std::int64_t session_id = 0;
+  std::int64_t source_index = 0;  // index of the image in its source
+  std::string source_path;
+  FrameOutcome outcome = FrameOutcome::kNewLocation;
+  std::optional<std::int64_t> location_id;  // the location holding the frame; none when bad
+  FrameTimings timings;
+  FrameStats stats;
+};
+
+struct LocationRecord {
+  std::int64_t id = 0;  // assigned by the engine
+  std::int64_t session_id = 0;
+  std::int64_t weight = 0;
+  Tier tier = Tier::kSTM;
+  std::optional<std::int64_t> created_frame;
+};
+
+struct LocationWeight {
+  std::int64_t id = 0;
+  std::int64_t weight = 0;
+};
+
+struct WordRecord {
+  std::int64_t id = 0;
+  std::optional<std::int64_t> created_frame;         // none for imported words
+  std::optional<std::int64_t> vocabulary_import_id;  // set for imported words
+  DescriptorKind type = DescriptorKind::kFloat32;
+  int dim = 0;
+  std::vector<std::uint8_t> descriptor;  // dim values of `type`, little-endian
+
+  static WordRecord fromFloats(std::int64_t id, std::optional<std::int64_t> created_frame,
+                               const float* values, int dim);
+  // The descriptor as floats; throws placedb::Error(kInternal) when type is not kFloat32.
+  std::vector<float> floats() const;
+};
+
+struct WordRef {  // one keypoint of a location's signature quantised to a word
+  std::int64_t word_id = 0;
+  float x = 0, y = 0, size = 0, angle = 0, response = 0;
+};
+
+struct LinkRecord {  // stored with location_a < location_b
+  std::int64_t location_a = 0;
+  std::int64_t location_b = 0;
+  LinkType type = LinkType::kNeighbour;
+  std::optional<double> score;
+};
+
+struct HypothesisRecord {
+  std::int64_t frame_id = 0;
+  std::optional<std::int64_t> best_location_id;
+  double posterior = 0;
+  double loop_probability = 0;
+  bool accepted = false;
+  std::string rejected_reason;  // empty when accepted or not applicable (stored as NULL)
+};
+
+struct VocabularyImportRecord {
+  std::int64_t id = 0;  // assigned by the database
+  std::optional<std::int64_t> session_id;
+  std::string file;
+  std::string checksum;
+  std::int64_t word_count = 0;
+  VocabularyMode mode = VocabularyMode::kFixed;
+  std::string imported_at;  // ISO 8601 UTC, set by the database when empty
+};
+
+}  // namespace placedb::storage
