@@ -122,6 +122,7 @@ CREATE TABLE hypotheses (
   accepted INTEGER NOT NULL CHECK (accepted IN (0, 1)),
   rejected_reason TEXT
 );
+CREATE INDEX hypotheses_by_location ON hypotheses (best_location_id);
 
 -- Engine state needed for an exact resume.
 CREATE TABLE engine_state (

@@ -16,8 +16,8 @@ enum class DescriptorKind : std::uint8_t { kFloat32 = 0, kBinary8U = 1 };
 
 struct SessionRecord {
   std::int64_t id = 0;
-  std::string started_at;                // ISO 8601 UTC, set by the database
-  std::optional<std::string> ended_at;   // empty while running or after a crash
+  std::string started_at;               // ISO 8601 UTC, set by the database
+  std::optional<std::string> ended_at;  // empty while running or after a crash
   bool clean_close = false;
   std::string software_version;
   std::string source;
@@ -29,8 +29,7 @@ struct FrameTimings {  // milliseconds per stage
 };
 
 struct FrameStats {
-  std::int64_t feature_count = 0, words_created = 0, vocabulary_size = 0, wm_size = 0,
-               stm_size = 0;
+  std::int64_t feature_count = 0, words_created = 0, vocabulary_size = 0, wm_size = 0, stm_size = 0;
   double mean_quantisation_error = 0;
 };
 

@@ -1,0 +1,153 @@
+#pragma once
+// MapStore: one placedb map file (SQLite) opened for reading and writing or for inspection.
+//
+// Opening read-write creates a missing map, refuses files that are not SQLite, SQLite files
+// that are not placedb maps and maps newer than this binary (ErrorCode::kMapRefused, file left
+// untouched), takes an exclusive advisory lock (a second writer gets kMapBusy) and then applies
+// the missing migrations. Every method that writes runs inside the open Transaction, or in one
+// of its own when none is open. All failures throw StorageError (a placedb::Error).
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "placedb/storage/records.h"
+#include "placedb/storage/storage_error.h"
+
+namespace placedb::storage {
+
+namespace detail {
+class Database;
+}
+
+enum class OpenMode { kReadWrite, kReadOnly };
+
+struct OpenOptions {
+  // How long a write waits for another connection's lock before kMapBusy.
+  int busy_timeout_ms = 5000;
+  // When > 0, caps the file at this many pages (SQLite's max_page_count): for disk-full tests.
+  std::int64_t max_page_count = 0;
+};
+
+// BEGIN IMMEDIATE on construction; rolls back on destruction unless committed.
+class Transaction {
+ public:
+  Transaction(Transaction&& other) noexcept;
+  Transaction& operator=(Transaction&&) = delete;
+  Transaction(const Transaction&) = delete;
+  Transaction& operator=(const Transaction&) = delete;
+  ~Transaction();
+
+  void commit();
+  void rollback();
+  bool active() const { return db_ != nullptr; }
+
+ private:
+  friend class MapStore;
+  explicit Transaction(detail::Database* db);
+  detail::Database* db_;
+};
+
+class MapStore {
+ public:
+  MapStore(const std::string& path, OpenMode mode, const OpenOptions& options = {});
+  ~MapStore();
+  MapStore(const MapStore&) = delete;
+  MapStore& operator=(const MapStore&) = delete;
+
+  const std::string& path() const { return path_; }
+  bool readOnly() const { return read_only_; }
+  int schemaVersion() const;
+  static int currentSchemaVersion();
+
+  // One per processed frame: everything written for the frame commits together.
+  Transaction begin();
+
+  // Sessions.
+  std::int64_t beginSession(const std::string& source,
+                            const std::map<std::string, std::string>& settings,
+                            const std::string& software_version);
+  void endSession(std::int64_t session_id, bool clean);
+  std::vector<SessionRecord> sessions() const;
+  std::optional<SessionRecord> lastSession() const;
+  std::map<std::string, std::string> settings(std::int64_t session_id) const;
+
+  // Frames. A record with id 0 gets the next id from the database; a non-zero id is kept.
+  // Within a transaction frames, words, locations and hypotheses may reference each other in
+  // any insertion order: those foreign keys are checked at commit.
+  std::int64_t insertFrame(const FrameRecord& frame);
+  std::optional<FrameRecord> frame(std::int64_t frame_id) const;
+  std::vector<FrameRecord> frames(std::int64_t session_id) const;  // by source index
+  std::optional<std::int64_t> lastFrameIndex(std::int64_t session_id) const;
+  std::int64_t frameCount() const;
+  std::int64_t frameCount(std::int64_t session_id) const;
+
+  // Locations.
+  void insertLocation(const LocationRecord& location);
+  void updateWeight(std::int64_t location_id, std::int64_t weight);
+  void setTier(const std::vector<std::int64_t>& location_ids, Tier tier);
+  // Removes the location with its references, coverage and links (frames keep NULL).
+  void deleteLocation(std::int64_t location_id);
+  void addCoveredFrame(std::int64_t location_id, std::int64_t frame_id);
+  std::vector<std::int64_t> coveredFrames(std::int64_t location_id) const;
+  std::map<std::int64_t, std::vector<std::int64_t>> coveredFrames(
+      const std::vector<std::int64_t>& location_ids) const;
+  std::vector<LocationWeight> locationsInTier(Tier tier) const;  // by id
+  std::optional<LocationRecord> location(std::int64_t location_id) const;
+  std::int64_t locationCount() const;
+
+  // Words.
+  void insertWords(const std::vector<WordRecord>& words);
+  // The words found, in the order asked; unknown ids are skipped.
+  std::vector<WordRecord> loadWords(const std::vector<std::int64_t>& word_ids) const;
+  std::int64_t wordCount() const;
+  std::optional<std::int64_t> maxWordId() const;
+
+  // Word references: a location's signature, kept in insertion order.
+  void insertWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs);
+  void replaceWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs);
+  std::vector<WordRef> loadWordRefs(std::int64_t location_id) const;
+  std::map<std::int64_t, std::vector<WordRef>> loadWordRefs(
+      const std::vector<std::int64_t>& location_ids) const;
+  std::vector<std::int64_t> wordsOfLocations(const std::vector<std::int64_t>& location_ids) const;
+  // The inverted index: locations whose signature holds the word, ascending.
+  std::vector<std::int64_t> locationsOfWord(std::int64_t word_id) const;
+
+  // Links, stored once per unordered pair and type; inserting again updates the score.
+  void insertLink(std::int64_t a, std::int64_t b, LinkType type, std::optional<double> score);
+  std::vector<LinkRecord> links(std::int64_t location_id) const;
+  // Locations linked to `location_id` (by `type`, or any link) that sit in `tier`, ascending.
+  std::vector<std::int64_t> linkedInTier(std::int64_t location_id, Tier tier,
+                                         std::optional<LinkType> type = std::nullopt) const;
+
+  // Loop-closure hypotheses, one per frame.
+  void insertHypothesis(const HypothesisRecord& hypothesis);
+  std::optional<HypothesisRecord> hypothesis(std::int64_t frame_id) const;
+
+  // Engine state for an exact resume.
+  void putState(const std::string& key, const std::vector<std::uint8_t>& value);
+  void putState(const std::string& key, const std::string& value);
+  std::optional<std::vector<std::uint8_t>> getState(const std::string& key) const;
+  std::optional<std::string> getStateText(const std::string& key) const;
+  // Replaces the whole stored posterior.
+  void putPosterior(const std::vector<std::pair<std::int64_t, double>>& posterior);
+  std::vector<std::pair<std::int64_t, double>> loadPosterior() const;  // by location id
+
+  // Vocabulary imports. imported_at is set to now when empty.
+  std::int64_t recordVocabularyImport(const VocabularyImportRecord& import);
+  std::vector<VocabularyImportRecord> vocabularyImports() const;
+
+ private:
+  class WriteScope;
+  void requireWritable() const;
+
+  std::string path_;
+  bool read_only_;
+  int lock_fd_ = -1;  // holds the writer's advisory lock
+  std::unique_ptr<detail::Database> db_;
+};
+
+}  // namespace placedb::storage

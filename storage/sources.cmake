@@ -1,0 +1,21 @@
+# Sources of placedb_storage. Migrations are embedded into the library at build time; adding or
+# editing a migrations/*.sql file re-runs the generator (the glob re-checks at build time).
+file(GLOB PLACEDB_MIGRATION_FILES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/migrations/*.sql)
+set(PLACEDB_MIGRATIONS_CPP ${CMAKE_CURRENT_BINARY_DIR}/generated/migrations_embedded.cpp)
+add_custom_command(
+  OUTPUT ${PLACEDB_MIGRATIONS_CPP}
+  COMMAND ${CMAKE_COMMAND} -DMIGRATIONS_DIR=${PROJECT_SOURCE_DIR}/migrations
+          -DOUTPUT=${PLACEDB_MIGRATIONS_CPP} -P ${CMAKE_CURRENT_LIST_DIR}/cmake/embed_migrations.cmake
+  DEPENDS ${PLACEDB_MIGRATION_FILES} ${CMAKE_CURRENT_LIST_DIR}/cmake/embed_migrations.cmake
+  COMMENT "Embedding schema migrations into placedb_storage"
+  VERBATIM)
+
+target_sources(placedb_storage PRIVATE
+  ${CMAKE_CURRENT_LIST_DIR}/src/database.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/map_file_check.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/migrations.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/map_store.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/map_store_signatures.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/records.cpp
+  ${PLACEDB_MIGRATIONS_CPP})
+target_include_directories(placedb_storage PRIVATE ${CMAKE_CURRENT_LIST_DIR}/src)

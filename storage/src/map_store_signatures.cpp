@@ -1,0 +1,334 @@
+// MapStore: words, word references, links, hypotheses, engine state and vocabulary imports.
+#include <algorithm>
+#include <set>
+
+#include "database.h"
+#include "placedb/storage/map_store.h"
+#include "write_scope.h"
+
+namespace placedb::storage {
+namespace {
+
+std::size_t bytesPerValue(DescriptorKind type) { return type == DescriptorKind::kFloat32 ? 4 : 1; }
+
+}  // namespace
+
+// ---- Words ----
+
+void MapStore::insertWords(const std::vector<WordRecord>& words) {
+  WriteScope scope(*this);
+  auto s = db_->cached(
+      "INSERT INTO words (id, created_frame, vocabulary_import_id, descriptor_type, dim, "
+      "descriptor) VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+  for (const WordRecord& w : words) {
+    if (w.dim <= 0 ||
+        w.descriptor.size() != static_cast<std::size_t>(w.dim) * bytesPerValue(w.type)) {
+      throw StorageError(ErrorCode::kInvalidArgument,
+                         "word " + std::to_string(w.id) + ": descriptor of " +
+                             std::to_string(w.descriptor.size()) + " bytes does not match dim " +
+                             std::to_string(w.dim));
+    }
+    s->bind(1, w.id);
+    s->bind(2, w.created_frame);
+    s->bind(3, w.vocabulary_import_id);
+    s->bind(4, std::int64_t{static_cast<int>(w.type)});
+    s->bind(5, std::int64_t{w.dim});
+    s->bindBlob(6, w.descriptor.data(), w.descriptor.size());
+    s->run();
+  }
+  scope.commit();
+}
+
+std::vector<WordRecord> MapStore::loadWords(const std::vector<std::int64_t>& word_ids) const {
+  auto s = db_->cached(
+      "SELECT id, created_frame, vocabulary_import_id, descriptor_type, dim, descriptor "
+      "FROM words WHERE id = ?1");
+  std::vector<WordRecord> result;
+  result.reserve(word_ids.size());
+  for (std::int64_t id : word_ids) {
+    s->reset();
+    s->bind(1, id);
+    if (!s->step()) continue;
+    WordRecord w;
+    w.id = s->columnInt(0);
+    w.created_frame = s->columnOptionalInt(1);
+    w.vocabulary_import_id = s->columnOptionalInt(2);
+    w.type = static_cast<DescriptorKind>(s->columnInt(3));
+    w.dim = static_cast<int>(s->columnInt(4));
+    w.descriptor = s->columnBlob(5);
+    result.push_back(std::move(w));
+  }
+  return result;
+}
+
+std::int64_t MapStore::wordCount() const {
+  auto s = db_->cached("SELECT count(*) FROM words");
+  s->step();
+  return s->columnInt(0);
+}
+
+std::optional<std::int64_t> MapStore::maxWordId() const {
+  auto s = db_->cached("SELECT max(id) FROM words");
+  s->step();
+  return s->columnOptionalInt(0);
+}
+
+// ---- Word references ----
+
+void MapStore::insertWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs) {
+  WriteScope scope(*this);
+  std::int64_t ordinal = 0;
+  {
+    auto s = db_->cached("SELECT max(ordinal) FROM word_refs WHERE location_id = ?1");
+    s->bind(1, location_id);
+    s->step();
+    if (!s->isNull(0)) ordinal = s->columnInt(0) + 1;
+  }
+  auto s = db_->cached(
+      "INSERT INTO word_refs (location_id, ordinal, word_id, x, y, size, angle, response) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)");
+  for (const WordRef& r : refs) {
+    s->bind(1, location_id);
+    s->bind(2, ordinal++);
+    s->bind(3, r.word_id);
+    s->bind(4, double{r.x});
+    s->bind(5, double{r.y});
+    s->bind(6, double{r.size});
+    s->bind(7, double{r.angle});
+    s->bind(8, double{r.response});
+    s->run();
+  }
+  scope.commit();
+}
+
+void MapStore::replaceWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs) {
+  WriteScope scope(*this);
+  {
+    auto s = db_->cached("DELETE FROM word_refs WHERE location_id = ?1");
+    s->bind(1, location_id);
+    s->run();
+  }
+  insertWordRefs(location_id, refs);
+  scope.commit();
+}
+
+std::vector<WordRef> MapStore::loadWordRefs(std::int64_t location_id) const {
+  auto s = db_->cached(
+      "SELECT word_id, x, y, size, angle, response FROM word_refs WHERE location_id = ?1 "
+      "ORDER BY ordinal");
+  s->bind(1, location_id);
+  std::vector<WordRef> result;
+  while (s->step()) {
+    result.push_back(
+        WordRef{s->columnInt(0), static_cast<float>(s->columnDouble(1)),
+                static_cast<float>(s->columnDouble(2)), static_cast<float>(s->columnDouble(3)),
+                static_cast<float>(s->columnDouble(4)), static_cast<float>(s->columnDouble(5))});
+  }
+  return result;
+}
+
+std::map<std::int64_t, std::vector<WordRef>> MapStore::loadWordRefs(
+    const std::vector<std::int64_t>& location_ids) const {
+  std::map<std::int64_t, std::vector<WordRef>> result;
+  for (std::int64_t id : location_ids) result[id] = loadWordRefs(id);
+  return result;
+}
+
+std::vector<std::int64_t> MapStore::wordsOfLocations(
+    const std::vector<std::int64_t>& location_ids) const {
+  auto s = db_->cached("SELECT word_id FROM word_refs WHERE location_id = ?1");
+  std::set<std::int64_t> words;
+  for (std::int64_t id : location_ids) {
+    s->reset();
+    s->bind(1, id);
+    while (s->step()) words.insert(s->columnInt(0));
+  }
+  return {words.begin(), words.end()};
+}
+
+std::vector<std::int64_t> MapStore::locationsOfWord(std::int64_t word_id) const {
+  auto s = db_->cached(
+      "SELECT DISTINCT location_id FROM word_refs WHERE word_id = ?1 ORDER BY location_id");
+  s->bind(1, word_id);
+  std::vector<std::int64_t> result;
+  while (s->step()) result.push_back(s->columnInt(0));
+  return result;
+}
+
+// ---- Links ----
+
+void MapStore::insertLink(std::int64_t a, std::int64_t b, LinkType type,
+                          std::optional<double> score) {
+  if (a == b) {
+    throw StorageError(ErrorCode::kInvalidArgument,
+                       "link of location " + std::to_string(a) + " to itself");
+  }
+  WriteScope scope(*this);
+  auto s = db_->cached(
+      "INSERT INTO links (location_a, location_b, type, score) VALUES (?1, ?2, ?3, ?4) "
+      "ON CONFLICT (location_a, location_b, type) DO UPDATE SET score = excluded.score");
+  s->bind(1, std::min(a, b));
+  s->bind(2, std::max(a, b));
+  s->bind(3, std::int64_t{static_cast<int>(type)});
+  s->bind(4, score);
+  s->run();
+  scope.commit();
+}
+
+std::vector<LinkRecord> MapStore::links(std::int64_t location_id) const {
+  auto s = db_->cached(
+      "SELECT location_a, location_b, type, score FROM links WHERE location_a = ?1 "
+      "UNION ALL SELECT location_a, location_b, type, score FROM links WHERE location_b = ?1 "
+      "ORDER BY 1, 2, 3");
+  s->bind(1, location_id);
+  std::vector<LinkRecord> result;
+  while (s->step()) {
+    result.push_back({s->columnInt(0), s->columnInt(1), static_cast<LinkType>(s->columnInt(2)),
+                      s->columnOptionalDouble(3)});
+  }
+  return result;
+}
+
+std::vector<std::int64_t> MapStore::linkedInTier(std::int64_t location_id, Tier tier,
+                                                 std::optional<LinkType> type) const {
+  auto s = db_->cached(
+      "SELECT DISTINCT k.other FROM ("
+      "  SELECT location_b AS other, type FROM links WHERE location_a = ?1"
+      "  UNION ALL SELECT location_a, type FROM links WHERE location_b = ?1) k "
+      "JOIN locations l ON l.id = k.other "
+      "WHERE l.tier = ?2 AND (?3 IS NULL OR k.type = ?3) ORDER BY k.other");
+  s->bind(1, location_id);
+  s->bind(2, std::int64_t{static_cast<int>(tier)});
+  if (type) s->bind(3, std::int64_t{static_cast<int>(*type)});
+  std::vector<std::int64_t> result;
+  while (s->step()) result.push_back(s->columnInt(0));
+  return result;
+}
+
+// ---- Hypotheses ----
+
+void MapStore::insertHypothesis(const HypothesisRecord& h) {
+  WriteScope scope(*this);
+  auto s = db_->cached(
+      "INSERT INTO hypotheses (frame_id, best_location_id, posterior, loop_probability, "
+      "accepted, rejected_reason) VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+  s->bind(1, h.frame_id);
+  s->bind(2, h.best_location_id);
+  s->bind(3, h.posterior);
+  s->bind(4, h.loop_probability);
+  s->bind(5, std::int64_t{h.accepted ? 1 : 0});
+  if (!h.rejected_reason.empty()) s->bind(6, h.rejected_reason);
+  s->run();
+  scope.commit();
+}
+
+std::optional<HypothesisRecord> MapStore::hypothesis(std::int64_t frame_id) const {
+  auto s = db_->cached(
+      "SELECT frame_id, best_location_id, posterior, loop_probability, accepted, "
+      "rejected_reason FROM hypotheses WHERE frame_id = ?1");
+  s->bind(1, frame_id);
+  if (!s->step()) return std::nullopt;
+  return HypothesisRecord{s->columnInt(0),    s->columnOptionalInt(1), s->columnDouble(2),
+                          s->columnDouble(3), s->columnInt(4) != 0,    s->columnText(5)};
+}
+
+// ---- Engine state ----
+
+void MapStore::putState(const std::string& key, const std::vector<std::uint8_t>& value) {
+  WriteScope scope(*this);
+  auto s = db_->cached(
+      "INSERT INTO engine_state (key, value) VALUES (?1, ?2) "
+      "ON CONFLICT (key) DO UPDATE SET value = excluded.value");
+  s->bind(1, key);
+  s->bindBlob(2, value.data(), value.size());
+  s->run();
+  scope.commit();
+}
+
+void MapStore::putState(const std::string& key, const std::string& value) {
+  WriteScope scope(*this);
+  auto s = db_->cached(
+      "INSERT INTO engine_state (key, value) VALUES (?1, ?2) "
+      "ON CONFLICT (key) DO UPDATE SET value = excluded.value");
+  s->bind(1, key);
+  s->bind(2, value);
+  s->run();
+  scope.commit();
+}
+
+std::optional<std::vector<std::uint8_t>> MapStore::getState(const std::string& key) const {
+  auto s = db_->cached("SELECT value FROM engine_state WHERE key = ?1");
+  s->bind(1, key);
+  if (!s->step()) return std::nullopt;
+  return s->columnBlob(0);
+}
+
+std::optional<std::string> MapStore::getStateText(const std::string& key) const {
+  auto s = db_->cached("SELECT value FROM engine_state WHERE key = ?1");
+  s->bind(1, key);
+  if (!s->step()) return std::nullopt;
+  return s->columnText(0);
+}
+
+void MapStore::putPosterior(const std::vector<std::pair<std::int64_t, double>>& posterior) {
+  WriteScope scope(*this);
+  {
+    auto s = db_->cached("DELETE FROM filter_posterior");
+    s->run();
+  }
+  auto s = db_->cached("INSERT INTO filter_posterior (location_id, probability) VALUES (?1, ?2)");
+  for (const auto& [location_id, probability] : posterior) {
+    s->bind(1, location_id);
+    s->bind(2, probability);
+    s->run();
+  }
+  scope.commit();
+}
+
+std::vector<std::pair<std::int64_t, double>> MapStore::loadPosterior() const {
+  auto s =
+      db_->cached("SELECT location_id, probability FROM filter_posterior ORDER BY location_id");
+  std::vector<std::pair<std::int64_t, double>> result;
+  while (s->step()) result.emplace_back(s->columnInt(0), s->columnDouble(1));
+  return result;
+}
+
+// ---- Vocabulary imports ----
+
+std::int64_t MapStore::recordVocabularyImport(const VocabularyImportRecord& v) {
+  WriteScope scope(*this);
+  auto s = db_->cached(
+      "INSERT INTO vocabulary_imports (session_id, file, checksum, word_count, mode, imported_at) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, coalesce(?6, strftime('%Y-%m-%dT%H:%M:%fZ', 'now')))");
+  s->bind(1, v.session_id);
+  s->bind(2, v.file);
+  s->bind(3, v.checksum);
+  s->bind(4, v.word_count);
+  s->bind(5, std::string(v.mode == VocabularyMode::kFixed ? "fixed" : "seed"));
+  if (!v.imported_at.empty()) s->bind(6, v.imported_at);
+  s->run();
+  const std::int64_t id = sqlite3_last_insert_rowid(db_->handle());
+  scope.commit();
+  return id;
+}
+
+std::vector<VocabularyImportRecord> MapStore::vocabularyImports() const {
+  auto s = db_->cached(
+      "SELECT id, session_id, file, checksum, word_count, mode, imported_at "
+      "FROM vocabulary_imports ORDER BY id");
+  std::vector<VocabularyImportRecord> result;
+  while (s->step()) {
+    VocabularyImportRecord v;
+    v.id = s->columnInt(0);
+    v.session_id = s->columnOptionalInt(1);
+    v.file = s->columnText(2);
+    v.checksum = s->columnText(3);
+    v.word_count = s->columnInt(4);
+    v.mode = s->columnText(5) == "fixed" ? VocabularyMode::kFixed : VocabularyMode::kSeed;
+    v.imported_at = s->columnText(6);
+    result.push_back(std::move(v));
+  }
+  return result;
+}
+
+}  // namespace placedb::storage

@@ -1,0 +1,274 @@
+// Opening, migrating and refusing map files.
+#include <sqlite3.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <regex>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "placedb/storage/map_store.h"
+#include "placedb/storage/migrations.h"
+#include "storage_test_util.h"
+#include "test_paths.h"
+
+namespace placedb::storage {
+namespace {
+
+using testing::fileBytes;
+using testing::writeBytes;
+
+// Raw access for setting up files the way other programs would.
+class RawDb {
+ public:
+  explicit RawDb(const std::string& path) {
+    EXPECT_EQ(sqlite3_open(path.c_str(), &db_), SQLITE_OK);
+  }
+  ~RawDb() { sqlite3_close(db_); }
+  void exec(const std::string& sql) {
+    char* error = nullptr;
+    ASSERT_EQ(sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, &error), SQLITE_OK)
+        << (error ? error : "") << " in " << sql;
+  }
+  std::vector<std::string> rows(const std::string& sql) {
+    sqlite3_stmt* stmt = nullptr;
+    EXPECT_EQ(sqlite3_prepare_v2(db_, sql.c_str(), -1, &stmt, nullptr), SQLITE_OK) << sql;
+    std::vector<std::string> result;
+    while (sqlite3_step(stmt) == SQLITE_ROW) {
+      std::string row;
+      for (int i = 0; i < sqlite3_column_count(stmt); ++i) {
+        const auto* text = sqlite3_column_text(stmt, i);
+        row += (i ? "|" : "") + std::string(text ? reinterpret_cast<const char*>(text) : "NULL");
+      }
+      result.push_back(row);
+    }
+    sqlite3_finalize(stmt);
+    return result;
+  }
+
+ private:
+  sqlite3* db_ = nullptr;
+};
+
+// sqlite_master text without comments and layout, so equal schemas compare equal.
+std::string normaliseSql(const std::string& sql) {
+  std::string text = std::regex_replace(sql, std::regex("--[^\n]*"), " ");
+  text = std::regex_replace(text, std::regex("\\s+"), " ");
+  text = std::regex_replace(text, std::regex(" ?([(),;]) ?"), "$1");
+  return std::regex_replace(text, std::regex("^ | $"), "");
+}
+
+std::vector<std::string> normalisedSchema(const std::string& path) {
+  RawDb db(path);
+  std::vector<std::string> schema;
+  for (const std::string& row :
+       db.rows("SELECT type || ' ' || name || ' ' || tbl_name || ' ' || coalesce(sql, '') "
+               "FROM sqlite_master ORDER BY type, name")) {
+    schema.push_back(normaliseSql(row));
+  }
+  schema.push_back("application_id " + db.rows("PRAGMA application_id").at(0));
+  schema.push_back("user_version " + db.rows("PRAGMA user_version").at(0));
+  return schema;
+}
+
+std::string readText(const std::string& path) { return fileBytes(path); }
+
+void expectRefused(const std::string& path, OpenMode mode, const std::string& reason_part) {
+  try {
+    MapStore store(path, mode);
+    ADD_FAILURE() << path << " was opened but should have been refused";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.code(), ErrorCode::kMapRefused) << error.what();
+    EXPECT_NE(std::string(error.what()).find(reason_part), std::string::npos)
+        << "message \"" << error.what() << "\" lacks \"" << reason_part << "\"";
+  }
+}
+
+// Refused in both modes, with the file byte-identical and no companion files left behind.
+void expectRefusedUntouched(const std::string& path, const std::string& reason_part) {
+  const std::string before = fileBytes(path);
+  expectRefused(path, OpenMode::kReadWrite, reason_part);
+  expectRefused(path, OpenMode::kReadOnly, reason_part);
+  EXPECT_EQ(fileBytes(path), before) << path << " changed";
+  EXPECT_FALSE(std::filesystem::exists(path + "-wal"));
+  EXPECT_FALSE(std::filesystem::exists(path + "-lock"));
+}
+
+TEST(Migrations, EmbeddedScriptsAreNumberedWithoutGaps) {
+  ASSERT_FALSE(migrations().empty());
+  for (std::size_t i = 0; i < migrations().size(); ++i) {
+    EXPECT_EQ(migrations()[i].version, static_cast<int>(i + 1));
+    std::string prefix = std::to_string(i + 1) + "_";
+    prefix.insert(0, 5 - prefix.size(), '0');
+    EXPECT_EQ(std::string(migrations()[i].name).rfind(prefix, 0), 0u) << migrations()[i].name;
+  }
+  EXPECT_EQ(currentSchemaVersion(), migrations().back().version);
+  EXPECT_EQ(MapStore::currentSchemaVersion(), currentSchemaVersion());
+}
+
+TEST(Migrations, AllMigrationsEqualSchemaSql) {
+  const auto dir = placedb::testing::scratchDir("AllMigrationsEqualSchemaSql");
+  const std::string migrated = (dir / "migrated.db").string();
+  buildMapAtVersion(migrated, currentSchemaVersion());
+  const std::string from_file = (dir / "schema.db").string();
+  {
+    RawDb db(from_file);
+    db.exec(readText(PLACEDB_SCHEMA_SQL));
+  }
+  const auto expected = normalisedSchema(from_file);
+  ASSERT_GT(expected.size(), 10u);
+  EXPECT_EQ(normalisedSchema(migrated), expected);
+}
+
+TEST(Migrations, NewMapGetsCurrentVersionAndMark) {
+  const auto dir = placedb::testing::scratchDir("NewMapGetsCurrentVersionAndMark");
+  const std::string missing = (dir / "new.db").string();
+  const std::string empty = (dir / "empty.db").string();
+  writeBytes(empty, "");
+  for (const std::string& path : {missing, empty}) {
+    {
+      MapStore store(path, OpenMode::kReadWrite);
+      EXPECT_EQ(store.schemaVersion(), currentSchemaVersion());
+      EXPECT_FALSE(store.readOnly());
+    }
+    RawDb db(path);
+    EXPECT_EQ(db.rows("PRAGMA application_id").at(0), std::to_string(kApplicationId));
+    EXPECT_EQ(db.rows("PRAGMA journal_mode").at(0), "wal");
+  }
+}
+
+TEST(Migrations, UpgradesFromEveryOlderVersionToCurrent) {
+  const auto dir = placedb::testing::scratchDir("UpgradesFromEveryOlderVersion");
+  const std::string reference = (dir / "reference.db").string();
+  buildMapAtVersion(reference, currentSchemaVersion());
+  const auto expected = normalisedSchema(reference);
+  // Version 0 is a blank SQLite file; versions 1..current-1 are built from the migrations alone.
+  for (int version = 0; version < currentSchemaVersion(); ++version) {
+    SCOPED_TRACE("from version " + std::to_string(version));
+    const std::string path = (dir / ("v" + std::to_string(version) + ".db")).string();
+    if (version == 0) {
+      RawDb blank(path);
+      blank.exec("PRAGMA user_version = 0");
+    } else {
+      buildMapAtVersion(path, version);
+      RawDb db(path);
+      EXPECT_EQ(db.rows("PRAGMA user_version").at(0), std::to_string(version));
+    }
+    {
+      MapStore store(path, OpenMode::kReadWrite);
+      EXPECT_EQ(store.schemaVersion(), currentSchemaVersion());
+      const auto session = store.beginSession("src", {}, "test");
+      testing::writeFrame(store, session, 0);
+      EXPECT_EQ(store.frameCount(), 1);
+    }
+    auto schema = normalisedSchema(path);
+    EXPECT_EQ(schema, expected);
+  }
+}
+
+TEST(Migrations, BuildMapAtVersionRejectsBadArguments) {
+  const auto dir = placedb::testing::scratchDir("BuildMapAtVersionRejects");
+  EXPECT_THROW(buildMapAtVersion((dir / "a.db").string(), 0), Error);
+  EXPECT_THROW(buildMapAtVersion((dir / "a.db").string(), currentSchemaVersion() + 1), Error);
+}
+
+TEST(Refusal, NewerMapNamesBothVersions) {
+  const auto dir = placedb::testing::scratchDir("NewerMap");
+  const std::string path = (dir / "newer.db").string();
+  { MapStore store(path, OpenMode::kReadWrite); }
+  const int newer = currentSchemaVersion() + 1;
+  {
+    RawDb db(path);
+    db.exec("PRAGMA user_version = " + std::to_string(newer));
+  }
+  std::filesystem::remove(path + "-lock");
+  const std::string expected_reason = "schema version " + std::to_string(newer) +
+                                      " is newer than this placedb binary supports (schema "
+                                      "version " +
+                                      std::to_string(currentSchemaVersion()) + ")";
+  expectRefusedUntouched(path, expected_reason);
+}
+
+TEST(Refusal, ForeignSqliteDatabases) {
+  const auto dir = placedb::testing::scratchDir("ForeignSqlite");
+  const std::string other_app = (dir / "other_app.db").string();
+  {
+    RawDb db(other_app);
+    db.exec(
+        "CREATE TABLE notes (id INTEGER PRIMARY KEY, body TEXT); "
+        "INSERT INTO notes (body) VALUES ('hello'); PRAGMA application_id = 42;");
+  }
+  expectRefusedUntouched(other_app, "not a placedb map (application_id 0x0000002A");
+
+  const std::string plain = (dir / "plain.db").string();
+  {
+    RawDb db(plain);
+    db.exec("CREATE TABLE t (x); INSERT INTO t VALUES (1);");
+  }
+  expectRefusedUntouched(plain, "not a placedb map");
+
+  // A blank SQLite file has nothing to lose: read-write adopts it, read-only refuses it.
+  const std::string blank = (dir / "blank.db").string();
+  {
+    RawDb db(blank);
+    db.exec("PRAGMA user_version = 0");
+  }
+  expectRefused(blank, OpenMode::kReadOnly, "empty SQLite database");
+}
+
+TEST(Refusal, FilesThatAreNotSqlite) {
+  const auto dir = placedb::testing::scratchDir("NotSqlite");
+  std::mt19937 random(7);
+  std::string noise(8192, '\0');
+  for (char& c : noise) c = static_cast<char>(random());
+  writeBytes((dir / "random.bin").string(), noise);
+  writeBytes((dir / "text.db").string(), "frame_index,path\n0,a.png\n1,b.png\n");
+  writeBytes((dir / "short.db").string(), "SQLite");
+  for (const char* name : {"random.bin", "text.db", "short.db"}) {
+    SCOPED_TRACE(name);
+    expectRefusedUntouched((dir / name).string(), "not a SQLite database");
+  }
+  // A header followed by garbage: SQLite itself says it is not a database.
+  std::string fake_header = std::string("SQLite format 3") + '\0' + noise.substr(16, 4080);
+  fake_header[16] = 0x10;  // page size 4096
+  fake_header[17] = 0x00;
+  writeBytes((dir / "fake.db").string(), fake_header);
+  const std::string before = fileBytes((dir / "fake.db").string());
+  EXPECT_THROW(MapStore((dir / "fake.db").string(), OpenMode::kReadWrite), Error);
+  EXPECT_EQ(fileBytes((dir / "fake.db").string()), before);
+}
+
+TEST(Refusal, TruncatedMap) {
+  const auto dir = placedb::testing::scratchDir("TruncatedMap");
+  const std::string path = (dir / "map.db").string();
+  {
+    MapStore store(path, OpenMode::kReadWrite);
+    const auto session = store.beginSession("src", {}, "test");
+    for (int i = 0; i < 40; ++i) testing::writeFrame(store, session, i, 50);
+  }
+  std::filesystem::remove(path + "-lock");
+  const std::string whole = fileBytes(path);
+  ASSERT_GT(whole.size(), 16u * 4096);
+  const std::string half_pages = (dir / "half.db").string();
+  writeBytes(half_pages, whole.substr(0, whole.size() / 2 / 4096 * 4096));
+  expectRefusedUntouched(half_pages, "truncated");
+  const std::string ragged = (dir / "ragged.db").string();
+  writeBytes(ragged, whole.substr(0, whole.size() - 1000));
+  expectRefusedUntouched(ragged, "truncated");
+}
+
+TEST(Refusal, ReadOnlyOpenOfMissingFileIsIoError) {
+  const auto dir = placedb::testing::scratchDir("ReadOnlyMissing");
+  try {
+    MapStore store((dir / "absent.db").string(), OpenMode::kReadOnly);
+    FAIL() << "opened a missing map read-only";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.code(), ErrorCode::kIo);
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "absent.db"));
+}
+
+}  // namespace
+}  // namespace placedb::storage

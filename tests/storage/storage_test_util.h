@@ -1,0 +1,48 @@
+#pragma once
+// Helpers shared by the storage tests.
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "placedb/storage/map_store.h"
+
+namespace placedb::storage::testing {
+
+inline std::string fileBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+inline void writeBytes(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+// Writes one complete frame (frame row, location, words, references) in one transaction.
+inline void writeFrame(MapStore& store, std::int64_t session_id, std::int64_t index,
+                       int words_per_frame = 4) {
+  Transaction tx = store.begin();
+  FrameRecord frame;
+  frame.id = index + 1;
+  frame.session_id = session_id;
+  frame.source_index = index;
+  frame.source_path = "img" + std::to_string(index) + ".png";
+  frame.location_id = index + 1;
+  store.insertFrame(frame);
+  store.insertLocation({index + 1, session_id, 1, Tier::kSTM, frame.id});
+  store.addCoveredFrame(index + 1, frame.id);
+  std::vector<WordRecord> words;
+  std::vector<WordRef> refs;
+  for (int i = 0; i < words_per_frame; ++i) {
+    const std::int64_t word_id = index * words_per_frame + i + 1;
+    std::vector<float> values(8, static_cast<float>(word_id));
+    words.push_back(WordRecord::fromFloats(word_id, frame.id, values.data(), 8));
+    refs.push_back({word_id, float(i), float(i), 2, 0, 1});
+  }
+  store.insertWords(words);
+  store.insertWordRefs(index + 1, refs);
+  tx.commit();
+}
+
+}  // namespace placedb::storage::testing
