@@ -1,0 +1,65 @@
+#pragma once
+// Word -> locations postings over the locations of STM and WM, so that the similarity of a query
+// with every location sharing a word costs only the postings of the query's words.
+#include <cstdint>
+#include <functional>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "filter/signature.h"
+
+namespace placedb {
+
+// Words whose reference count crossed zero during one change: they enter or leave the kd-index.
+struct WordChanges {
+  std::vector<WordId> referenced;    // now used by exactly one location, before by none (sorted)
+  std::vector<WordId> unreferenced;  // now used by no location (sorted)
+};
+
+struct LocationSimilarity {
+  LocationId location;
+  double similarity;    // eq. 5, > 0
+  std::int64_t paired;  // N_pair behind it
+};
+
+class InvertedIndex {
+ public:
+  // Location must not be present yet (kInvalidArgument otherwise).
+  WordChanges add(LocationId location, const Signature& signature);
+  // Location must be present (kInvalidArgument otherwise).
+  WordChanges remove(LocationId location);
+  // Swap a present location's signature; words both in old and new never appear in the lists.
+  WordChanges replace(LocationId location, const Signature& signature);
+
+  bool contains(LocationId location) const { return signatures_.count(location) != 0; }
+  const Signature& signatureOf(LocationId location) const;  // kInvalidArgument when absent
+  std::size_t locationCount() const { return signatures_.size(); }
+  // Number of distinct words referenced by at least one location.
+  std::size_t wordCount() const { return postings_.size(); }
+  // Locations whose signature holds the word (0 when unreferenced).
+  std::size_t referenceCount(WordId word) const;
+  bool isReferenced(WordId word) const { return postings_.count(word) != 0; }
+
+  // Similarity with every location sharing at least one word with the query and accepted by the
+  // filter (all locations when the filter is empty). Sorted by location id. Locations sharing no
+  // word have similarity 0 and are not listed.
+  using CandidateFilter = std::function<bool(LocationId)>;
+  std::vector<LocationSimilarity> similarities(const Signature& query,
+                                               const CandidateFilter& accept = nullptr) const;
+
+  // Words that would leave the index if all these locations were removed together (sorted).
+  std::vector<WordId> wordsFreedByRemoving(const std::vector<LocationId>& locations) const;
+
+ private:
+  struct Posting {
+    LocationId location;
+    std::int32_t count;
+  };
+  // Postings per word; a word with no posting is erased, so the map's keys are the referenced
+  // words.
+  std::unordered_map<WordId, std::vector<Posting>> postings_;
+  std::unordered_map<LocationId, Signature> signatures_;
+};
+
+}  // namespace placedb

@@ -1,0 +1,72 @@
+#include "filter/link_graph.h"
+
+#include <algorithm>
+#include <deque>
+#include <string>
+#include <unordered_map>
+
+#include "placedb/error.h"
+
+namespace placedb {
+
+void LinkGraph::addNode(LocationId id) { adjacency_[id]; }
+
+void LinkGraph::removeNode(LocationId id) {
+  auto it = adjacency_.find(id);
+  if (it == adjacency_.end()) return;
+  for (LocationId other : it->second) adjacency_[other].erase(id);
+  adjacency_.erase(it);
+}
+
+void LinkGraph::addLink(LocationId a, LocationId b) {
+  if (a == b) {
+    throw Error(ErrorCode::kInvalidArgument,
+                "link graph: self-link on location " + std::to_string(a) + " refused");
+  }
+  adjacency_[a].insert(b);
+  adjacency_[b].insert(a);
+}
+
+void LinkGraph::removeLink(LocationId a, LocationId b) {
+  auto ia = adjacency_.find(a);
+  if (ia != adjacency_.end()) ia->second.erase(b);
+  auto ib = adjacency_.find(b);
+  if (ib != adjacency_.end()) ib->second.erase(a);
+}
+
+bool LinkGraph::hasLink(LocationId a, LocationId b) const {
+  auto it = adjacency_.find(a);
+  return it != adjacency_.end() && it->second.count(b) != 0;
+}
+
+std::vector<LocationId> LinkGraph::neighbours(LocationId id) const {
+  auto it = adjacency_.find(id);
+  if (it == adjacency_.end()) return {};
+  return {it->second.begin(), it->second.end()};
+}
+
+std::vector<std::pair<LocationId, int>> LinkGraph::withinLinks(LocationId start, int max_depth,
+                                                               const NodeFilter& allowed) const {
+  std::vector<std::pair<LocationId, int>> found;
+  if (max_depth < 0 || adjacency_.count(start) == 0) return found;
+  if (allowed && !allowed(start)) return found;
+  std::unordered_map<LocationId, int> depth_of{{start, 0}};
+  std::deque<LocationId> frontier{start};
+  while (!frontier.empty()) {
+    const LocationId node = frontier.front();
+    frontier.pop_front();
+    const int depth = depth_of[node];
+    found.emplace_back(node, depth);
+    if (depth == max_depth) continue;
+    for (LocationId next : adjacency_.at(node)) {
+      if (depth_of.count(next) != 0) continue;
+      if (allowed && !allowed(next)) continue;
+      depth_of.emplace(next, depth + 1);
+      frontier.push_back(next);
+    }
+  }
+  std::sort(found.begin(), found.end());
+  return found;
+}
+
+}  // namespace placedb

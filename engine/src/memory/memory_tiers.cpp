@@ -1,0 +1,316 @@
+#include "memory/memory_tiers.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "placedb/error.h"
+
+namespace placedb {
+
+namespace {
+[[noreturn]] void invalid(const std::string& message) {
+  throw Error(ErrorCode::kInvalidArgument, "memory tiers: " + message);
+}
+std::string idText(MemoryLocationId id) { return std::to_string(id); }
+}  // namespace
+
+const char* toString(Tier tier) {
+  switch (tier) {
+    case Tier::kStm:
+      return "stm";
+    case Tier::kWm:
+      return "wm";
+    case Tier::kLtm:
+      return "ltm";
+  }
+  return "unknown";
+}
+
+void MemorySettings::validate() const {
+  std::ostringstream problems;
+  if (stm_size < 0 || stm_size > 100000) problems << " stm_size=" << stm_size << " (0..100000);";
+  if (wm_max < 0) problems << " wm_max=" << wm_max << " (>= 0, 0 = unbounded);";
+  if (!(time_limit_s >= 0.0) || !std::isfinite(time_limit_s)) {
+    problems << " time_limit_s=" << time_limit_s << " (finite, >= 0, 0 = off);";
+  }
+  if (immune_newest_count < 0) {
+    problems << " immune_newest_count=" << immune_newest_count << " (>= 0);";
+  }
+  if (!(immune_newest_ratio >= 0.0 && immune_newest_ratio < 1.0)) {
+    problems << " immune_newest_ratio=" << immune_newest_ratio << " (0 <= x < 1);";
+  }
+  if (max_transfers_per_frame < 0) {
+    problems << " max_transfers_per_frame=" << max_transfers_per_frame << " (>= 0, 0 = no cap);";
+  }
+  if (max_retrieved < 0) problems << " max_retrieved=" << max_retrieved << " (>= 0);";
+  const std::string text = problems.str();
+  if (!text.empty()) throw Error(ErrorCode::kInvalidArgument, "invalid memory settings:" + text);
+}
+
+MemoryTiers::MemoryTiers(const MemorySettings& settings) : settings_(settings) {
+  settings_.validate();
+}
+
+LocationRecord& MemoryTiers::recordOf(MemoryLocationId id) {
+  auto it = records_.find(id);
+  if (it == records_.end()) invalid("unknown location " + idText(id));
+  return it->second;
+}
+
+const LocationRecord& MemoryTiers::recordOf(MemoryLocationId id) const {
+  auto it = records_.find(id);
+  if (it == records_.end()) invalid("unknown location " + idText(id));
+  return it->second;
+}
+
+void MemoryTiers::enterWm(LocationRecord& r) {
+  r.tier = Tier::kWm;
+  wm_by_priority_.emplace(r.weight, r.age, r.id);
+  wm_by_age_.emplace(r.age, r.id);
+}
+
+void MemoryTiers::leaveWm(const LocationRecord& r) {
+  wm_by_priority_.erase(Priority{r.weight, r.age, r.id});
+  wm_by_age_.erase({r.age, r.id});
+}
+
+void MemoryTiers::removeEverywhere(MemoryLocationId id) {
+  const LocationRecord& r = recordOf(id);
+  switch (r.tier) {
+    case Tier::kStm:
+      stm_.erase(std::find(stm_.begin(), stm_.end(), id));
+      break;
+    case Tier::kWm:
+      leaveWm(r);
+      break;
+    case Tier::kLtm:
+      ltm_.erase(id);
+      break;
+  }
+  retrieved_this_frame_.erase(id);
+  records_.erase(id);
+}
+
+std::vector<MemoryLocationId> MemoryTiers::push(MemoryLocationId id,
+                                                std::optional<MemoryLocationId> absorb) {
+  if (contains(id)) invalid("location " + idText(id) + " pushed twice");
+  std::int64_t weight = 0;
+  if (absorb) {
+    const LocationRecord& old = recordOf(*absorb);
+    if (old.tier == Tier::kLtm) invalid("cannot merge LTM location " + idText(*absorb));
+    weight = old.weight + 1;
+    removeEverywhere(*absorb);
+  }
+  records_[id] = LocationRecord{id, Tier::kStm, weight, next_age_++};
+  stm_.push_back(id);
+  std::vector<MemoryLocationId> overflow;
+  while (stm_.size() > static_cast<std::size_t>(settings_.stm_size)) {
+    const MemoryLocationId oldest = stm_.front();
+    stm_.pop_front();
+    enterWm(records_.at(oldest));
+    overflow.push_back(oldest);
+  }
+  return overflow;
+}
+
+void MemoryTiers::merge(MemoryLocationId survivor, MemoryLocationId absorbed) {
+  if (survivor == absorbed) invalid("location " + idText(survivor) + " merged into itself");
+  const LocationRecord& gone = recordOf(absorbed);
+  const LocationRecord& kept = recordOf(survivor);
+  if (gone.tier == Tier::kLtm || kept.tier == Tier::kLtm) {
+    invalid("merge of " + idText(absorbed) + " into " + idText(survivor) + " involves LTM");
+  }
+  const std::int64_t gained = gone.weight + 1;
+  removeEverywhere(absorbed);
+  addWeight(survivor, gained);
+}
+
+void MemoryTiers::addWeight(MemoryLocationId id, std::int64_t delta) {
+  LocationRecord& r = recordOf(id);
+  const bool in_wm = r.tier == Tier::kWm;
+  if (in_wm) leaveWm(r);
+  r.weight = std::max<std::int64_t>(0, r.weight + delta);
+  if (in_wm) enterWm(r);
+}
+
+std::size_t MemoryTiers::plannedTransfers(double frame_seconds) const {
+  const std::size_t wm_size = wmSize();
+  std::size_t by_size = 0;
+  if (settings_.wm_max > 0 && wm_size > static_cast<std::size_t>(settings_.wm_max)) {
+    by_size = wm_size - static_cast<std::size_t>(settings_.wm_max);
+  }
+  std::size_t by_time = 0;
+  if (settings_.time_limit_s > 0.0 && frame_seconds > settings_.time_limit_s && wm_size > 0) {
+    const double excess = (frame_seconds - settings_.time_limit_s) / frame_seconds;
+    by_time = static_cast<std::size_t>(std::ceil(static_cast<double>(wm_size) * excess));
+    by_time = std::max<std::size_t>(by_time, 1);
+    if (settings_.max_transfers_per_frame > 0) {
+      by_time = std::min(by_time, static_cast<std::size_t>(settings_.max_transfers_per_frame));
+    }
+  }
+  return std::min(std::max(by_size, by_time), wm_size);
+}
+
+std::size_t MemoryTiers::newestWmCount() const {
+  const auto by_ratio = static_cast<std::size_t>(
+      std::floor(settings_.immune_newest_ratio * static_cast<double>(wmSize())));
+  return std::min(wmSize(),
+                  std::max(by_ratio, static_cast<std::size_t>(settings_.immune_newest_count)));
+}
+
+std::set<MemoryLocationId> MemoryTiers::newestWm() const {
+  std::set<MemoryLocationId> newest;
+  std::size_t left = newestWmCount();
+  for (auto it = wm_by_age_.rbegin(); it != wm_by_age_.rend() && left > 0; ++it, --left) {
+    newest.insert(it->second);
+  }
+  return newest;
+}
+
+std::vector<MemoryLocationId> MemoryTiers::transferCandidates(
+    std::size_t max_count, const std::set<MemoryLocationId>& immune) const {
+  const std::set<MemoryLocationId> newest = newestWm();
+  std::vector<MemoryLocationId> chosen;
+  for (const auto& [weight, age, id] : wm_by_priority_) {
+    if (chosen.size() >= max_count) break;
+    if (immune.count(id) || retrieved_this_frame_.count(id) || newest.count(id)) continue;
+    chosen.push_back(id);
+  }
+  return chosen;
+}
+
+void MemoryTiers::transferToLtm(const std::vector<MemoryLocationId>& ids) {
+  for (MemoryLocationId id : ids) {
+    if (tierOf(id) != Tier::kWm) invalid("transfer of " + idText(id) + ", which is not in WM");
+  }
+  for (MemoryLocationId id : ids) {
+    LocationRecord& r = records_.at(id);
+    if (r.tier != Tier::kWm) invalid("location " + idText(id) + " transferred twice");
+    leaveWm(r);
+    r.tier = Tier::kLtm;
+    ltm_.insert(id);
+    retrieved_this_frame_.erase(id);
+  }
+}
+
+std::vector<MemoryLocationId> MemoryTiers::retrievalCandidates(
+    MemoryLocationId best_hypothesis, const std::vector<MemoryLocationId>& ltm_neighbours) const {
+  std::vector<MemoryLocationId> chosen;
+  if (best_hypothesis < 0) return chosen;  // no hypothesis, nothing to bring back
+  for (MemoryLocationId id : ltm_neighbours) {
+    if (chosen.size() >= static_cast<std::size_t>(settings_.max_retrieved)) break;
+    if (ltm_.count(id) == 0) continue;
+    if (std::find(chosen.begin(), chosen.end(), id) != chosen.end()) continue;
+    chosen.push_back(id);
+  }
+  return chosen;
+}
+
+void MemoryTiers::retrieveToWm(const std::vector<MemoryLocationId>& ids) {
+  for (MemoryLocationId id : ids) {
+    if (tierOf(id) != Tier::kLtm) invalid("retrieval of " + idText(id) + ", which is not in LTM");
+  }
+  for (MemoryLocationId id : ids) {
+    LocationRecord& r = records_.at(id);
+    if (r.tier != Tier::kLtm) invalid("location " + idText(id) + " retrieved twice");
+    ltm_.erase(id);
+    enterWm(r);
+    retrieved_this_frame_.insert(id);
+  }
+}
+
+void MemoryTiers::addToLtm(MemoryLocationId id, std::int64_t weight) {
+  if (contains(id)) invalid("location " + idText(id) + " added twice");
+  if (weight < 0) invalid("negative weight for location " + idText(id));
+  records_[id] = LocationRecord{id, Tier::kLtm, weight, next_age_++};
+  ltm_.insert(id);
+}
+
+Tier MemoryTiers::tierOf(MemoryLocationId id) const { return recordOf(id).tier; }
+std::int64_t MemoryTiers::weightOf(MemoryLocationId id) const { return recordOf(id).weight; }
+std::int64_t MemoryTiers::ageOf(MemoryLocationId id) const { return recordOf(id).age; }
+
+std::vector<MemoryLocationId> MemoryTiers::wm() const {
+  std::vector<MemoryLocationId> ids;
+  ids.reserve(wm_by_age_.size());
+  for (const auto& entry : wm_by_age_) ids.push_back(entry.second);
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+std::vector<MemoryLocationId> MemoryTiers::ltm() const { return {ltm_.begin(), ltm_.end()}; }
+
+std::string MemoryTiers::checkInvariants() const {
+  std::ostringstream problem;
+  std::map<MemoryLocationId, int> seen;  // how many tier indexes list each id
+  std::set<MemoryLocationId> stm_ids;
+  for (MemoryLocationId id : stm_) {
+    ++seen[id];
+    if (!stm_ids.insert(id).second) return "location " + idText(id) + " twice in STM";
+  }
+  if (wm_by_priority_.size() != wm_by_age_.size()) return "WM indexes differ in size";
+  for (const auto& [weight, age, id] : wm_by_priority_) {
+    ++seen[id];
+    if (wm_by_age_.count({age, id}) == 0) return "WM location " + idText(id) + " lacks its age";
+    auto rec = records_.find(id);
+    if (rec == records_.end() || rec->second.weight != weight || rec->second.age != age) {
+      return "WM location " + idText(id) + " indexed with a stale weight or age";
+    }
+  }
+  for (MemoryLocationId id : ltm_) ++seen[id];
+  if (stm_.size() > static_cast<std::size_t>(settings_.stm_size)) return "STM over its size";
+  for (const auto& [id, count] : seen) {
+    if (count != 1) return "location " + idText(id) + " is in " + std::to_string(count) + " tiers";
+    auto rec = records_.find(id);
+    if (rec == records_.end()) return "location " + idText(id) + " in a tier but unknown";
+  }
+  for (const auto& [id, r] : records_) {
+    if (r.id != id) return "record of " + idText(id) + " names " + idText(r.id);
+    if (seen.count(id) == 0) return "location " + idText(id) + " is in no tier";
+    const bool listed = (r.tier == Tier::kStm && stm_ids.count(id)) ||
+                        (r.tier == Tier::kWm && wm_by_age_.count({r.age, id})) ||
+                        (r.tier == Tier::kLtm && ltm_.count(id));
+    if (!listed) return "location " + idText(id) + " is not where its record says";
+    if (r.weight < 0) return "location " + idText(id) + " has a negative weight";
+    if (r.age >= next_age_) return "location " + idText(id) + " is younger than the clock";
+  }
+  for (MemoryLocationId id : retrieved_this_frame_) {
+    auto rec = records_.find(id);
+    if (rec == records_.end() || rec->second.tier != Tier::kWm) {
+      return "retrieved location " + idText(id) + " is not in WM";
+    }
+  }
+  return problem.str();
+}
+
+MemorySnapshot MemoryTiers::snapshot() const {
+  MemorySnapshot s;
+  for (const auto& [id, r] : records_) s.locations.push_back(r);
+  s.stm.assign(stm_.begin(), stm_.end());
+  s.next_age = next_age_;
+  return s;
+}
+
+void MemoryTiers::restore(const MemorySnapshot& snapshot) {
+  MemoryTiers rebuilt(settings_);
+  for (const LocationRecord& r : snapshot.locations) {
+    if (!rebuilt.records_.emplace(r.id, r).second)
+      invalid("snapshot lists " + idText(r.id) + " twice");
+    if (r.tier == Tier::kWm) rebuilt.enterWm(rebuilt.records_.at(r.id));
+    if (r.tier == Tier::kLtm) rebuilt.ltm_.insert(r.id);
+  }
+  for (MemoryLocationId id : snapshot.stm) {
+    auto it = rebuilt.records_.find(id);
+    if (it == rebuilt.records_.end() || it->second.tier != Tier::kStm) {
+      invalid("snapshot STM lists " + idText(id) + ", which is not an STM record");
+    }
+    rebuilt.stm_.push_back(id);
+  }
+  rebuilt.next_age_ = snapshot.next_age;
+  const std::string problem = rebuilt.checkInvariants();
+  if (!problem.empty()) invalid("inconsistent snapshot: " + problem);
+  *this = std::move(rebuilt);
+}
+
+}  // namespace placedb

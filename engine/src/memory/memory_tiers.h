@@ -1,0 +1,142 @@
+#pragma once
+// Which tier every location is in: short-term memory (STM, the newest locations, never loop
+// candidates), working memory (WM, the loop candidates) or long-term memory (LTM, database only),
+// with the weights and ages that choose what moves between WM and LTM (SPEC sections 5 and 7).
+//
+// Policies fixed here:
+// - Age is the creation order: push() stamps each location with the next sequence number, kept
+//   through every tier. "Oldest first among equal weights" uses it, as does "the newest part of
+//   WM": the max(immune_newest_count, floor(immune_newest_ratio x |WM|)) WM locations of largest
+//   age. An old location retrieved from LTM is therefore immune only during its retrieval frame.
+// - How many to transfer (plannedTransfers): the size trigger asks for |WM| - wm_max; the time
+//   trigger assumes frame time grows with |WM| and asks for ceil(|WM| x (t - T_time) / t), at
+//   least 1, at most max_transfers_per_frame (0 = no cap); the larger request wins. A caller that
+//   prefers RTAB-Map's word balance (transfer until as many words left the vocabulary as this
+//   frame created) walks transferCandidates() in order and stops on its own.
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+namespace placedb {
+
+using MemoryLocationId = std::int64_t;
+
+enum class Tier : std::uint8_t { kStm = 0, kWm = 1, kLtm = 2 };
+const char* toString(Tier tier);
+
+struct MemorySettings {
+  int stm_size = 10;                 // RTAB-Map's Mem/STMSize
+  std::int64_t wm_max = 0;           // WM size bound; 0 = bounded by time only
+  double time_limit_s = 0.7;         // T_time (paper 000: 0.7 s at 1 Hz); 0 = no time trigger
+  int immune_newest_count = 0;       // newest WM locations never transferred
+  double immune_newest_ratio = 0.2;  // ... or this share of WM (RTAB-Map's Mem/RecentWmRatio)
+  int max_transfers_per_frame = 0;   // cap of the time trigger; 0 = none
+  int max_retrieved = 2;             // RTAB-Map's Rtabmap/MaxRetrieved
+
+  void validate() const;  // kInvalidArgument naming each bad field and its valid range
+};
+
+struct LocationRecord {
+  MemoryLocationId id = 0;
+  Tier tier = Tier::kStm;
+  std::int64_t weight = 0;
+  std::int64_t age = 0;  // creation order
+  bool operator==(const LocationRecord& o) const {
+    return id == o.id && tier == o.tier && weight == o.weight && age == o.age;
+  }
+};
+
+// Everything needed to rebuild the tiers exactly; STM order is the order of `stm`.
+struct MemorySnapshot {
+  std::vector<LocationRecord> locations;  // sorted by id
+  std::vector<MemoryLocationId> stm;      // oldest first
+  std::int64_t next_age = 0;
+  bool operator==(const MemorySnapshot& o) const {
+    return locations == o.locations && stm == o.stm && next_age == o.next_age;
+  }
+};
+
+class MemoryTiers {
+ public:
+  explicit MemoryTiers(const MemorySettings& settings = {});  // validates
+
+  // Starts a frame: forgets which locations were retrieved during the previous one.
+  void beginFrame() { retrieved_this_frame_.clear(); }
+
+  // Adds a new location at the young end of STM with weight 0. With `absorb`, that location
+  // (STM or WM) is merged into the new one first: it disappears from every tier and the new one
+  // takes its weight + 1 (paper 004's rehearsal). Returns the locations STM overflowed into WM,
+  // oldest first, counted after the merge.
+  std::vector<MemoryLocationId> push(MemoryLocationId id,
+                                     std::optional<MemoryLocationId> absorb = std::nullopt);
+  // Merges `absorbed` into `survivor` (both in STM or WM): survivor weight += absorbed + 1, and
+  // absorbed disappears. Use when the older id is kept.
+  void merge(MemoryLocationId survivor, MemoryLocationId absorbed);
+  void addWeight(MemoryLocationId id, std::int64_t delta);  // not below 0
+
+  // How many WM locations the triggers ask to move to LTM (see the header comment).
+  std::size_t plannedTransfers(double frame_seconds) const;
+  // WM locations in transfer order (lowest weight, then oldest), skipping `immune`, the locations
+  // retrieved this frame and the newest part of WM; at most max_count.
+  std::vector<MemoryLocationId> transferCandidates(std::size_t max_count,
+                                                   const std::set<MemoryLocationId>& immune) const;
+  // Moves these WM locations to LTM (kInvalidArgument if one is not in WM).
+  void transferToLtm(const std::vector<MemoryLocationId>& ids);
+
+  // Of the given LTM neighbours of the best hypothesis (caller's order, e.g. nearest first), those
+  // really in LTM, without repeats, at most max_retrieved.
+  std::vector<MemoryLocationId> retrievalCandidates(
+      MemoryLocationId best_hypothesis, const std::vector<MemoryLocationId>& ltm_neighbours) const;
+  // Moves these LTM locations to WM and marks them retrieved this frame.
+  void retrieveToWm(const std::vector<MemoryLocationId>& ids);
+
+  // Registers a location already in LTM (a previous session's map) without a frame.
+  void addToLtm(MemoryLocationId id, std::int64_t weight);
+
+  bool contains(MemoryLocationId id) const { return records_.count(id) != 0; }
+  Tier tierOf(MemoryLocationId id) const;  // kInvalidArgument when unknown
+  std::int64_t weightOf(MemoryLocationId id) const;
+  std::int64_t ageOf(MemoryLocationId id) const;
+  const std::deque<MemoryLocationId>& stm() const { return stm_; }
+  std::vector<MemoryLocationId> wm() const;   // sorted by id
+  std::vector<MemoryLocationId> ltm() const;  // sorted by id
+  std::size_t wmSize() const { return wm_by_priority_.size(); }
+  std::size_t ltmSize() const { return ltm_.size(); }
+  const std::set<MemoryLocationId>& retrievedThisFrame() const { return retrieved_this_frame_; }
+  // Newest part of WM as defined above.
+  std::set<MemoryLocationId> newestWm() const;
+  std::size_t newestWmCount() const;
+
+  // Empty when every location is in exactly one tier and every index agrees with the records;
+  // otherwise a description of the first problem found.
+  std::string checkInvariants() const;
+
+  MemorySnapshot snapshot() const;
+  void restore(const MemorySnapshot& snapshot);  // kInvalidArgument when inconsistent
+  const MemorySettings& settings() const { return settings_; }
+
+ private:
+  using Priority = std::tuple<std::int64_t, std::int64_t, MemoryLocationId>;  // weight, age, id
+  LocationRecord& recordOf(MemoryLocationId id);
+  const LocationRecord& recordOf(MemoryLocationId id) const;
+  void enterWm(LocationRecord& r);
+  void leaveWm(const LocationRecord& r);
+  void removeEverywhere(MemoryLocationId id);
+
+  MemorySettings settings_;
+  std::map<MemoryLocationId, LocationRecord> records_;
+  std::deque<MemoryLocationId> stm_;                               // oldest first
+  std::set<Priority> wm_by_priority_;                              // transfer order
+  std::set<std::pair<std::int64_t, MemoryLocationId>> wm_by_age_;  // newest part
+  std::set<MemoryLocationId> ltm_;
+  std::set<MemoryLocationId> retrieved_this_frame_;
+  std::int64_t next_age_ = 0;
+};
+
+}  // namespace placedb

@@ -1,0 +1,2 @@
+# Memory tiers: STM / WM / LTM membership, weights, transfer and retrieval choices.
+target_sources(placedb_engine PRIVATE ${CMAKE_CURRENT_LIST_DIR}/memory_tiers.cpp)
