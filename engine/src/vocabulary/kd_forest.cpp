@@ -1,0 +1,202 @@
+#include "vocabulary/kd_forest.h"
+
+#include <algorithm>
+#include <array>
+#include <limits>
+#include <queue>
+#include <string>
+
+#include "placedb/error.h"
+
+namespace placedb::vocab {
+
+namespace {
+
+// FLANN's choices: split among the 5 highest-variance dimensions, estimate from at most 100 points.
+constexpr int kTopDims = 5;
+
+std::uint64_t splitMix64(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
+}  // namespace
+
+float squaredDistance(const float* a, const float* b, int dim) {
+  // Four partial sums let the compiler vectorise; the summation order is fixed, so results are
+  // identical on every run of the same binary.
+  float s0 = 0, s1 = 0, s2 = 0, s3 = 0;
+  int i = 0;
+  for (; i + 4 <= dim; i += 4) {
+    const float d0 = a[i] - b[i], d1 = a[i + 1] - b[i + 1];
+    const float d2 = a[i + 2] - b[i + 2], d3 = a[i + 3] - b[i + 3];
+    s0 += d0 * d0;
+    s1 += d1 * d1;
+    s2 += d2 * d2;
+    s3 += d3 * d3;
+  }
+  for (; i < dim; ++i) {
+    const float d = a[i] - b[i];
+    s0 += d * d;
+  }
+  return (s0 + s1) + (s2 + s3);
+}
+
+void offerNeighbor(std::vector<Neighbor>* best, std::size_t k, Neighbor candidate) {
+  if (k == 0) return;
+  if (best->size() == k && !(candidate < best->back())) return;
+  auto at = std::upper_bound(best->begin(), best->end(), candidate);
+  best->insert(at, candidate);
+  if (best->size() > k) best->pop_back();
+}
+
+KdForest::KdForest(const SlotStore* store, int trees, int leaf_size, std::uint64_t seed)
+    : store_(store), dim_(store->dim()), leaf_size_(leaf_size), seed_(seed), trees_(trees) {
+  for (auto& tree : trees_) tree.nodes.emplace_back();  // every tree starts as one empty leaf
+}
+
+std::int32_t KdForest::leafOf(const Tree& tree, const float* v) const {
+  std::int32_t node = 0;
+  while (tree.nodes[node].left >= 0) {
+    const Node& n = tree.nodes[node];
+    node = v[n.dim] < n.value ? n.left : n.right;
+  }
+  return node;
+}
+
+void KdForest::insertImpl(std::uint32_t slot, bool may_split) {
+  if (seen_.size() < store_->slotCount()) seen_.resize(store_->slotCount(), 0);
+  const float* v = store_->data(slot);
+  for (std::uint32_t t = 0; t < trees_.size(); ++t) {
+    const std::int32_t leaf = leafOf(trees_[t], v);
+    trees_[t].nodes[leaf].bucket.push_back(slot);
+    if (may_split && trees_[t].nodes[leaf].bucket.size() > std::size_t(leaf_size_)) {
+      trySplit(t, leaf);
+    }
+  }
+}
+
+void KdForest::remove(std::uint32_t slot) {
+  const float* v = store_->data(slot);
+  for (auto& tree : trees_) {
+    auto& bucket = tree.nodes[leafOf(tree, v)].bucket;
+    auto it = std::find(bucket.begin(), bucket.end(), slot);
+    if (it == bucket.end()) {
+      throw Error(ErrorCode::kInternal, "kd-forest: removed point is not in its bucket");
+    }
+    *it = bucket.back();
+    bucket.pop_back();
+  }
+}
+
+void KdForest::trySplit(std::uint32_t tree_index, std::int32_t node_index) {
+  // Sort by word id so that the float sums below do not depend on the bucket's history.
+  std::vector<std::uint32_t> points = trees_[tree_index].nodes[node_index].bucket;
+  std::sort(points.begin(), points.end(),
+            [&](std::uint32_t a, std::uint32_t b) { return store_->id(a) < store_->id(b); });
+  const std::size_t n = points.size();
+  std::vector<double> mean(dim_, 0.0), var(dim_, 0.0);
+  for (std::uint32_t p : points) {
+    const float* v = store_->data(p);
+    for (int d = 0; d < dim_; ++d) mean[d] += v[d];
+  }
+  for (int d = 0; d < dim_; ++d) mean[d] /= double(n);
+  for (std::uint32_t p : points) {
+    const float* v = store_->data(p);
+    for (int d = 0; d < dim_; ++d) var[d] += (v[d] - mean[d]) * (v[d] - mean[d]);
+  }
+  std::vector<int> order(dim_);
+  for (int d = 0; d < dim_; ++d) order[d] = d;
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return var[a] > var[b]; });
+  int candidates = 0;
+  while (candidates < kTopDims && candidates < dim_ && var[order[candidates]] > 0) ++candidates;
+  if (candidates == 0) return;  // identical points: keep the bucket whole
+  const std::uint64_t draw =
+      splitMix64(seed_ ^ splitMix64((std::uint64_t(tree_index) << 32) | std::uint32_t(node_index)));
+  const int dim = order[draw % std::uint64_t(candidates)];
+  const float value = static_cast<float>(mean[dim]);
+  std::size_t left = 0;
+  for (std::uint32_t p : points) left += store_->data(p)[dim] < value ? 1 : 0;
+  if (left == 0 || left == n) return;  // rounding put every point on one side
+  applySplit(tree_index, node_index, static_cast<std::uint16_t>(dim), value);
+  splits_.push_back({static_cast<std::uint8_t>(tree_index), static_cast<std::uint32_t>(node_index),
+                     static_cast<std::uint16_t>(dim), value});
+}
+
+void KdForest::applySplit(std::uint32_t tree_index, std::int32_t node_index, std::uint16_t dim,
+                          float value) {
+  Tree& tree = trees_[tree_index];
+  const auto left = static_cast<std::int32_t>(tree.nodes.size());
+  tree.nodes.emplace_back();
+  tree.nodes.emplace_back();
+  Node& node = tree.nodes[node_index];
+  std::vector<std::uint32_t> bucket;
+  bucket.swap(node.bucket);
+  node.left = left;
+  node.right = left + 1;
+  node.dim = dim;
+  node.value = value;
+  for (std::uint32_t p : bucket) {
+    tree.nodes[store_->data(p)[dim] < value ? left : left + 1].bucket.push_back(p);
+  }
+}
+
+void KdForest::replaySplits(const std::vector<SplitRecord>& log) {
+  for (const SplitRecord& s : log) {
+    if (s.tree >= trees_.size() || s.node >= trees_[s.tree].nodes.size() ||
+        trees_[s.tree].nodes[s.node].left >= 0 || s.dim >= dim_) {
+      throw Error(ErrorCode::kInvalidArgument,
+                  "vocabulary index state: split log does not fit the forest (tree " +
+                      std::to_string(s.tree) + ", node " + std::to_string(s.node) + ")");
+    }
+    applySplit(s.tree, static_cast<std::int32_t>(s.node), s.dim, s.value);
+    splits_.push_back(s);
+  }
+}
+
+void KdForest::search(const float* query, std::size_t k, int checks,
+                      std::vector<Neighbor>* out) const {
+  out->clear();
+  if (k == 0) return;
+  if (seen_.size() < store_->slotCount()) seen_.resize(store_->slotCount(), 0);
+  if (++query_stamp_ == 0) {  // wrapped: old marks could collide with the new stamp
+    std::fill(seen_.begin(), seen_.end(), 0);
+    query_stamp_ = 1;
+  }
+  const float inf = std::numeric_limits<float>::infinity();
+  auto worst = [&]() { return out->size() < k ? inf : out->back().dist2; };
+  std::priority_queue<Branch, std::vector<Branch>, std::greater<Branch>> branches;
+  int compared = 0;
+
+  // Walks down from a node to its leaf, queueing the far side of every split on the way.
+  auto descend = [&](std::uint32_t t, std::int32_t node, float bound) {
+    const Tree& tree = trees_[t];
+    while (tree.nodes[node].left >= 0) {
+      const Node& n = tree.nodes[node];
+      const float diff = query[n.dim] - n.value;
+      const std::int32_t near_child = diff < 0 ? n.left : n.right;
+      const std::int32_t far_child = diff < 0 ? n.right : n.left;
+      const float far_bound = bound + diff * diff;
+      if (far_bound <= worst()) branches.push({far_bound, t, far_child});
+      node = near_child;
+    }
+    for (std::uint32_t slot : tree.nodes[node].bucket) {
+      if (seen_[slot] == query_stamp_) continue;
+      seen_[slot] = query_stamp_;
+      ++compared;
+      offerNeighbor(out, k, {squaredDistance(query, store_->data(slot), dim_), store_->id(slot)});
+    }
+  };
+
+  for (std::uint32_t t = 0; t < trees_.size(); ++t) descend(t, 0, 0.f);
+  while (!branches.empty() && (compared < checks || out->size() < k)) {
+    const Branch b = branches.top();
+    branches.pop();
+    if (b.bound > worst()) continue;
+    descend(b.tree, b.node, b.bound);
+  }
+}
+
+}  // namespace placedb::vocab

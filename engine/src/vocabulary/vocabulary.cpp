@@ -1,0 +1,270 @@
+#include "vocabulary/vocabulary.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <sstream>
+#include <unordered_set>
+
+#include "placedb/error.h"
+
+namespace placedb::vocab {
+
+namespace {
+
+void require(bool ok, const std::string& message) {
+  if (!ok) throw Error(ErrorCode::kInvalidArgument, "vocabulary: " + message);
+}
+
+std::string formatFloat(float v) {
+  std::ostringstream out;
+  out.precision(9);
+  out << v;
+  return out.str();
+}
+
+}  // namespace
+
+const char* toString(WordRule rule) { return rule == WordRule::kGreedy ? "greedy" : "nndr"; }
+const char* toString(DistanceUnit unit) {
+  return unit == DistanceUnit::kSquared ? "squared" : "euclidean";
+}
+
+void VocabularyOptions::validate() const {
+  require(rule == WordRule::kGreedy || rule == WordRule::kNndr, "rule must be greedy or nndr");
+  require(unit == DistanceUnit::kSquared || unit == DistanceUnit::kEuclidean,
+          "distance unit must be squared or euclidean");
+  require(t_nndr > 0 && t_nndr <= 1, "t_nndr must be in (0, 1], got " + formatFloat(t_nndr));
+  require(t_nd1 >= 0 && std::isfinite(t_nd1), "t_nd1 must be >= 0, got " + formatFloat(t_nd1));
+  require(t_nd2 >= t_nd1 && std::isfinite(t_nd2),
+          "t_nd2 must be finite and >= t_nd1, got " + formatFloat(t_nd2));
+  require(kd_trees >= 1 && kd_trees <= 64,
+          "kd_trees must be in [1, 64], got " + std::to_string(kd_trees));
+  require(checks >= 1 && checks <= 1000000,
+          "checks must be in [1, 1000000], got " + std::to_string(checks));
+  require(leaf_size >= 1 && leaf_size <= 4096,
+          "leaf_size must be in [1, 4096], got " + std::to_string(leaf_size));
+}
+
+std::map<std::string, std::string> VocabularyOptions::toSettings() const {
+  return {{"rule", toString(rule)},           {"distance_unit", toString(unit)},
+          {"t_nndr", formatFloat(t_nndr)},    {"t_nd1", formatFloat(t_nd1)},
+          {"t_nd2", formatFloat(t_nd2)},      {"kd_trees", std::to_string(kd_trees)},
+          {"checks", std::to_string(checks)}, {"leaf_size", std::to_string(leaf_size)},
+          {"seed", std::to_string(seed)},     {"fixed", fixed ? "true" : "false"}};
+}
+
+Vocabulary::Vocabulary(VocabularyOptions options, int dim, std::string extractor_signature)
+    : options_(options), dim_(dim), extractor_(std::move(extractor_signature)), store_(dim) {
+  options_.validate();
+  require(dim >= 1 && dim <= 4096, "dimension must be in [1, 4096], got " + std::to_string(dim));
+  forest_ =
+      std::make_unique<KdForest>(&store_, options_.kd_trees, options_.leaf_size, options_.seed);
+}
+
+void Vocabulary::checkDescriptors(const cv::Mat& descriptors, const char* what) const {
+  if (descriptors.empty()) return;
+  require(descriptors.type() == CV_32F, std::string(what) + ": descriptors must be CV_32F");
+  require(descriptors.cols == dim_, std::string(what) + ": descriptors have " +
+                                        std::to_string(descriptors.cols) +
+                                        " columns, the vocabulary " + std::to_string(dim_));
+}
+
+float Vocabulary::inUnit(float dist2) const {
+  return options_.unit == DistanceUnit::kSquared ? dist2 : std::sqrt(dist2);
+}
+
+bool Vocabulary::decideNewWord(const std::vector<Neighbor>& best) const {
+  if (best.empty()) return true;  // ND = NND = +inf
+  const float nd = inUnit(best[0].dist2);
+  const float nnd =
+      best.size() > 1 ? inUnit(best[1].dist2) : std::numeric_limits<float>::infinity();
+  if (options_.rule == WordRule::kGreedy) {
+    if (nd > options_.t_nd2) return true;
+    if (nd < options_.t_nd1) return false;
+  }
+  // ND/NND > T_NNDR, written without the division: +inf NND gives false, 0/0 gives false.
+  return nd > options_.t_nndr * nnd;
+}
+
+void Vocabulary::addWord(std::int64_t id, std::int64_t created_frame, const float* descriptor,
+                         bool split) {
+  const std::uint32_t slot = store_.add(id, created_frame, descriptor);
+  slot_of_.emplace(id, slot);
+  if (split) {
+    forest_->insert(slot);
+  } else {
+    forest_->insertWithoutSplitting(slot);
+  }
+}
+
+Quantization Vocabulary::quantize(const cv::Mat& descriptors, std::int64_t frame_id) {
+  checkDescriptors(descriptors, "quantize");
+  touched_ = true;
+  const int m = descriptors.rows;
+  Quantization q;
+  q.word_of_feature.assign(m, -1);
+  q.distance_of_feature.assign(m, 0.f);
+  if (m == 0) return q;
+  const cv::Mat rows = descriptors.isContinuous() ? descriptors : descriptors.clone();
+  auto row = [&](int i) { return rows.ptr<float>(i); };
+
+  // ND, NND and nearest word of every feature against V_{t-1}.
+  std::vector<std::vector<Neighbor>> best(m);
+  const std::size_t k = options_.fixed ? 1 : 2;
+  for (int i = 0; i < m; ++i) forest_->search(row(i), k, options_.checks, &best[i]);
+
+  if (options_.fixed) {
+    double sum = 0;
+    for (int i = 0; i < m; ++i) {
+      if (best[i].empty()) continue;
+      q.word_of_feature[i] = best[i][0].id;
+      q.distance_of_feature[i] = std::sqrt(best[i][0].dist2);
+      sum += q.distance_of_feature[i];
+    }
+    q.mean_error = sum / m;
+    return q;
+  }
+
+  std::vector<int> order(m);
+  std::iota(order.begin(), order.end(), 0);
+  if (options_.rule == WordRule::kGreedy) {
+    // Largest ND first. Equal NDs are ordered by descriptor value so that the result does not
+    // depend on the order of features inside the image.
+    const float inf = std::numeric_limits<float>::infinity();
+    auto nd = [&](int i) { return best[i].empty() ? inf : best[i][0].dist2; };
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+      if (nd(a) != nd(b)) return nd(a) > nd(b);
+      const float* ra = row(a);
+      const float* rb = row(b);
+      for (int d = 0; d < dim_; ++d) {
+        if (ra[d] != rb[d]) return ra[d] < rb[d];
+      }
+      return a < b;
+    });
+  }
+
+  std::vector<int> created_rows;  // rows that became words, in creation order
+  for (int i : order) {
+    std::vector<Neighbor>& top = best[i];
+    for (std::size_t w = 0; w < created_rows.size(); ++w) {
+      offerNeighbor(&top, 2,
+                    {squaredDistance(row(i), row(created_rows[w]), dim_), q.created_words[w]});
+    }
+    if (decideNewWord(top)) {
+      q.word_of_feature[i] = next_word_id_++;
+      q.created_words.push_back(q.word_of_feature[i]);
+      created_rows.push_back(i);
+    } else {
+      q.word_of_feature[i] = top[0].id;
+      q.distance_of_feature[i] = std::sqrt(top[0].dist2);
+    }
+  }
+  for (std::size_t w = 0; w < created_rows.size(); ++w) {
+    addWord(q.created_words[w], frame_id, row(created_rows[w]), true);
+  }
+  double sum = 0;
+  for (float d : q.distance_of_feature) sum += d;
+  q.mean_error = sum / m;
+  return q;
+}
+
+void Vocabulary::insert(const std::vector<std::int64_t>& ids, const cv::Mat& descriptors,
+                        const std::vector<std::int64_t>& created_frames) {
+  checkDescriptors(descriptors, "insert");
+  require(std::size_t(descriptors.rows) == ids.size() && created_frames.size() == ids.size(),
+          "insert: ids, descriptors and created frames differ in count");
+  std::unordered_set<std::int64_t> given;
+  for (std::int64_t id : ids) {
+    require(id >= 0, "insert: negative word id " + std::to_string(id));
+    require(!contains(id), "insert: word " + std::to_string(id) + " is already in RAM");
+    require(given.insert(id).second, "insert: word " + std::to_string(id) + " given twice");
+  }
+  touched_ = true;
+  const cv::Mat rows = descriptors.isContinuous() ? descriptors : descriptors.clone();
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    addWord(ids[i], created_frames[i], rows.ptr<float>(int(i)), true);
+    next_word_id_ = std::max(next_word_id_, ids[i] + 1);
+  }
+}
+
+void Vocabulary::erase(const std::vector<std::int64_t>& ids) {
+  for (std::int64_t id : ids) {
+    require(contains(id), "erase: word " + std::to_string(id) + " is not in RAM");
+  }
+  touched_ = true;
+  for (std::int64_t id : ids) {
+    auto it = slot_of_.find(id);
+    if (it == slot_of_.end()) continue;  // listed twice
+    forest_->remove(it->second);
+    store_.release(it->second);
+    slot_of_.erase(it);
+  }
+}
+
+const float* Vocabulary::descriptor(std::int64_t id) const {
+  auto it = slot_of_.find(id);
+  return it == slot_of_.end() ? nullptr : store_.data(it->second);
+}
+
+std::int64_t Vocabulary::createdFrame(std::int64_t id) const {
+  auto it = slot_of_.find(id);
+  return it == slot_of_.end() ? -1 : store_.createdFrame(it->second);
+}
+
+std::vector<std::int64_t> Vocabulary::ids() const {
+  std::vector<std::int64_t> out;
+  out.reserve(slot_of_.size());
+  for (const auto& entry : slot_of_) out.push_back(entry.first);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<std::pair<std::int64_t, float>> Vocabulary::knn(const float* query, int k) const {
+  require(k >= 0, "knn: k must be >= 0");
+  std::vector<Neighbor> best;
+  forest_->search(query, std::size_t(k), options_.checks, &best);
+  std::vector<std::pair<std::int64_t, float>> out;
+  out.reserve(best.size());
+  for (const Neighbor& n : best) out.emplace_back(n.id, std::sqrt(n.dist2));
+  return out;
+}
+
+IndexState Vocabulary::state() const {
+  IndexState s;
+  s.dim = dim_;
+  s.kd_trees = options_.kd_trees;
+  s.leaf_size = options_.leaf_size;
+  s.seed = options_.seed;
+  s.next_word_id = next_word_id_;
+  s.splits = forest_->splits();
+  return s;
+}
+
+void Vocabulary::restore(const IndexState& state, const std::vector<std::int64_t>& ids,
+                         const cv::Mat& descriptors,
+                         const std::vector<std::int64_t>& created_frames) {
+  require(!touched_, "restore: the vocabulary has already been used");
+  require(state.dim == dim_ && state.kd_trees == options_.kd_trees &&
+              state.leaf_size == options_.leaf_size && state.seed == options_.seed,
+          "restore: the state was made with other index settings (dim " +
+              std::to_string(state.dim) + ", trees " + std::to_string(state.kd_trees) + ", leaf " +
+              std::to_string(state.leaf_size) + ")");
+  checkDescriptors(descriptors, "restore");
+  require(std::size_t(descriptors.rows) == ids.size() && created_frames.size() == ids.size(),
+          "restore: ids, descriptors and created frames differ in count");
+  forest_->replaySplits(state.splits);
+  touched_ = true;
+  const cv::Mat rows = descriptors.isContinuous() ? descriptors : descriptors.clone();
+  std::int64_t max_id = -1;
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    require(!contains(ids[i]), "restore: word " + std::to_string(ids[i]) + " given twice");
+    addWord(ids[i], created_frames[i], rows.ptr<float>(int(i)), false);
+    max_id = std::max(max_id, ids[i]);
+  }
+  require(max_id < state.next_word_id, "restore: a word id is beyond the state's next word id");
+  next_word_id_ = state.next_word_id;
+}
+
+}  // namespace placedb::vocab

@@ -1,0 +1,142 @@
+#pragma once
+// The online visual vocabulary: words held in RAM (those of STM/WM locations), their kd-index, and
+// the quantisation of an image's descriptors into word ids by the greedy rule (paper 000,
+// algorithm 3) or the NNDR rule (algorithms 1-2).
+//
+// Distances. The index works in squared Euclidean distance. DistanceUnit says in which unit ND and
+// NND are compared with T_ND1, T_ND2 and T_NNDR: kSquared (default) follows RTAB-Map, whose FLANN
+// L2 distances are squared, so ND/NND > T_NNDR is a ratio of squared distances; kEuclidean takes
+// square roots first. Quantisation errors are always reported in plain Euclidean units.
+//
+// Fewer than two candidates. With no word at all (empty vocabulary and none created yet from this
+// image) ND = NND = +inf and the feature creates a word under both rules (fixed mode: it gets no
+// word, id -1). With exactly one candidate NND = +inf: the ratio test reads ND > T_NNDR * NND,
+// which is false, so NNDR gives the nearest word; greedy first applies T_ND2 / T_ND1 as usual.
+//
+// Determinism. Every answer is a function of the sequence of calls (quantize/insert/erase/restore)
+// only: the index has no background work and no unseeded randomness, and distance ties go to the
+// smaller word id. state()/restore() carry that sequence's effect across a restart exactly.
+//
+// Not thread-safe: one thread at a time (searches reuse per-query scratch marks).
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "vocabulary/kd_forest.h"
+#include "vocabulary/slot_store.h"
+
+namespace placedb::vocab {
+
+enum class WordRule : std::uint8_t { kGreedy = 0, kNndr = 1 };
+enum class DistanceUnit : std::uint8_t { kSquared = 0, kEuclidean = 1 };
+
+const char* toString(WordRule rule);
+const char* toString(DistanceUnit unit);
+
+struct VocabularyOptions {
+  WordRule rule = WordRule::kGreedy;
+  DistanceUnit unit = DistanceUnit::kSquared;
+  float t_nndr = 0.8f;   // (0, 1]
+  float t_nd1 = 0.001f;  // >= 0, in `unit`
+  float t_nd2 = 0.08f;   // >= t_nd1, in `unit`
+  int kd_trees = 4;      // [1, 64]
+  // Points compared per search; 64 gives >= 0.95 nearest-neighbour recall on 1M clustered 64-d
+  // words with 4 trees and 16-point leaves (bench/vocabulary/README.md).
+  int checks = 64;     // [1, 1'000'000]
+  int leaf_size = 16;  // points per kd-tree bucket before it splits, [1, 4096]
+  std::uint64_t seed = 0x706c616365646231ull;  // the forest's split choices
+  bool fixed = false;                          // no new words: every feature takes its nearest word
+
+  // Throws placedb::Error(kInvalidArgument) naming the first setting out of range.
+  void validate() const;
+  // Key/value form, for the vocabulary file header.
+  std::map<std::string, std::string> toSettings() const;
+};
+
+struct Quantization {
+  std::vector<std::int64_t> word_of_feature;  // -1 only in fixed mode with no word at all
+  std::vector<std::int64_t> created_words;    // in creation order (ids ascending)
+  std::vector<float> distance_of_feature;     // Euclidean, feature -> its word (0 if it created it)
+  double mean_error = 0;                      // mean of distance_of_feature, 0 for no feature
+};
+
+// What must be persisted so that restore() reproduces the index exactly. The split log is
+// append-only: an engine may store only the records beyond the ones it already holds.
+struct IndexState {
+  int dim = 0;
+  int kd_trees = 0;
+  int leaf_size = 0;
+  std::uint64_t seed = 0;
+  std::int64_t next_word_id = 0;
+  std::vector<SplitRecord> splits;
+
+  std::vector<std::uint8_t> serialize() const;  // little-endian, versioned
+  // Throws placedb::Error(kInvalidArgument) on bytes that are not a valid state.
+  static IndexState deserialize(const std::vector<std::uint8_t>& bytes);
+  bool operator==(const IndexState& o) const;
+};
+
+class Vocabulary {
+ public:
+  Vocabulary(VocabularyOptions options, int dim, std::string extractor_signature);
+
+  // Assigns every row of `descriptors` (CV_32F, dim columns) a word, creating words (created
+  // frame = frame_id) that enter the index at once.
+  Quantization quantize(const cv::Mat& descriptors, std::int64_t frame_id);
+
+  // Words coming back into RAM (retrieval) or loaded at start. Ids must not be active;
+  // nextWordId() becomes at least max(id) + 1.
+  void insert(const std::vector<std::int64_t>& ids, const cv::Mat& descriptors,
+              const std::vector<std::int64_t>& created_frames);
+  // Words leaving RAM (their locations all went to LTM); their descriptors are dropped.
+  // Unknown ids are an error (kInvalidArgument).
+  void erase(const std::vector<std::int64_t>& ids);
+
+  bool contains(std::int64_t id) const { return slot_of_.count(id) != 0; }
+  std::size_t size() const { return slot_of_.size(); }
+  std::int64_t nextWordId() const { return next_word_id_; }
+  const float* descriptor(std::int64_t id) const;    // nullptr if not in RAM
+  std::int64_t createdFrame(std::int64_t id) const;  // -1 if not in RAM
+  std::vector<std::int64_t> ids() const;             // ascending
+  int dim() const { return dim_; }
+  const VocabularyOptions& options() const { return options_; }
+  const std::string& extractorSignature() const { return extractor_; }
+
+  // The k nearest words (approximate, `checks` of the options), plain Euclidean distances.
+  std::vector<std::pair<std::int64_t, float>> knn(const float* query, int k) const;
+
+  IndexState state() const;
+  // Grows whenever state() changes (both parts only grow: the split log and the next word id);
+  // persist the state when it moved. A restored vocabulary reports the same version.
+  std::uint64_t stateVersion() const {
+    return forest_->splits().size() + static_cast<std::uint64_t>(next_word_id_);
+  }
+  // On a Vocabulary that has seen no call yet: rebuilds the index from the persisted state and
+  // the words in RAM at that point (ids, their descriptors and created frames, any order). No
+  // erased word is needed: erased points leave the trees, only the splits they caused remain.
+  void restore(const IndexState& state, const std::vector<std::int64_t>& ids,
+               const cv::Mat& descriptors, const std::vector<std::int64_t>& created_frames);
+
+ private:
+  void checkDescriptors(const cv::Mat& descriptors, const char* what) const;
+  void addWord(std::int64_t id, std::int64_t created_frame, const float* descriptor, bool split);
+  bool decideNewWord(const std::vector<Neighbor>& best) const;
+  float inUnit(float dist2) const;
+
+  VocabularyOptions options_;
+  int dim_;
+  std::string extractor_;
+  SlotStore store_;
+  std::unique_ptr<KdForest> forest_;
+  std::unordered_map<std::int64_t, std::uint32_t> slot_of_;
+  std::int64_t next_word_id_ = 0;
+  bool touched_ = false;
+};
+
+}  // namespace placedb::vocab

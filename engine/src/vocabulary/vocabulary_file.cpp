@@ -1,0 +1,308 @@
+#include "vocabulary/vocabulary_file.h"
+
+#include <boost/archive/archive_exception.hpp>
+#include <boost/archive/binary_iarchive.hpp>
+#include <boost/archive/binary_oarchive.hpp>
+#include <boost/crc.hpp>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "placedb/error.h"
+
+namespace placedb::vocab {
+
+namespace {
+
+constexpr char kMagic[8] = {'P', 'L', 'D', 'B', 'V', 'O', 'C', '1'};
+constexpr unsigned kArchiveFlags = boost::archive::no_header | boost::archive::no_codecvt;
+constexpr std::uint32_t kMaxHeaderBytes = 1u << 20;
+constexpr std::uint32_t kMaxStringBytes = 1u << 16;
+
+std::uint32_t crc32Of(const std::string& bytes) {
+  boost::crc_32_type crc;
+  crc.process_bytes(bytes.data(), bytes.size());
+  return crc.checksum();
+}
+
+void saveString(boost::archive::binary_oarchive& ar, const std::string& s) {
+  const auto length = static_cast<std::uint32_t>(s.size());
+  ar << length;
+  ar.save_binary(s.data(), s.size());
+}
+
+// Reads from a byte string whose every length field is checked before use.
+class HeaderParser {
+ public:
+  explicit HeaderParser(const std::string& bytes) : bytes_(bytes) {}
+  template <typename T>
+  T get() {
+    need(sizeof(T));
+    T value;
+    std::memcpy(&value, bytes_.data() + at_, sizeof(T));
+    at_ += sizeof(T);
+    return value;
+  }
+  std::string getString() {
+    const auto length = get<std::uint32_t>();
+    if (length > kMaxStringBytes) throw std::runtime_error("header string too long");
+    need(length);
+    std::string s = bytes_.substr(at_, length);
+    at_ += length;
+    return s;
+  }
+  bool done() const { return at_ == bytes_.size(); }
+
+ private:
+  void need(std::size_t n) const {
+    if (bytes_.size() - at_ < n) throw std::runtime_error("header is truncated");
+  }
+  const std::string& bytes_;
+  std::size_t at_ = 0;
+};
+
+[[noreturn]] void refuse(const std::filesystem::path& path, const std::string& why) {
+  throw Error(ErrorCode::kVocabularyRefused,
+              "vocabulary file " + path.string() + " refused: " + why);
+}
+
+void checkData(const VocabularyData& data) {
+  const std::size_t n = data.ids.size();
+  const bool ok =
+      data.dim > 0 && data.created_frames.size() == n &&
+      (n == 0 || (data.descriptors.type() == CV_32F && data.descriptors.rows == int(n) &&
+                  data.descriptors.cols == data.dim));
+  if (!ok) {
+    throw Error(ErrorCode::kInvalidArgument,
+                "vocabulary data: ids, created frames and descriptors (n x dim, CV_32F) disagree");
+  }
+}
+
+std::string headerBytes(const VocabularyData& data) {
+  std::ostringstream out(std::ios::binary);
+  {
+    boost::archive::binary_oarchive ar(out, kArchiveFlags);
+    saveString(ar, data.extractor);
+    const auto type = static_cast<std::uint8_t>(data.type);
+    const auto dim = static_cast<std::int32_t>(data.dim);
+    const auto unit = static_cast<std::uint8_t>(data.unit);
+    const auto count = static_cast<std::uint64_t>(data.ids.size());
+    const auto settings = static_cast<std::uint32_t>(data.settings.size());
+    ar << type << dim << unit << count << settings;
+    for (const auto& [key, value] : data.settings) {
+      saveString(ar, key);
+      saveString(ar, value);
+    }
+  }
+  return out.str();
+}
+
+std::string payloadBytes(const VocabularyData& data) {
+  const std::size_t n = data.ids.size();
+  std::string bytes;
+  bytes.reserve(n * (16 + 4 * std::size_t(data.dim)));
+  bytes.append(reinterpret_cast<const char*>(data.ids.data()), n * 8);
+  bytes.append(reinterpret_cast<const char*>(data.created_frames.data()), n * 8);
+  for (std::size_t i = 0; i < n; ++i) {
+    bytes.append(reinterpret_cast<const char*>(data.descriptors.ptr<float>(int(i))),
+                 4 * std::size_t(data.dim));
+  }
+  return bytes;
+}
+
+}  // namespace
+
+VocabularyData snapshotOf(const Vocabulary& vocabulary) {
+  VocabularyData data;
+  data.extractor = vocabulary.extractorSignature();
+  data.type = DescriptorType::kFloat32;
+  data.dim = vocabulary.dim();
+  data.unit = vocabulary.options().unit;
+  data.settings = vocabulary.options().toSettings();
+  data.ids = vocabulary.ids();
+  data.created_frames.reserve(data.ids.size());
+  data.descriptors.create(int(data.ids.size()), data.dim, CV_32F);
+  for (std::size_t i = 0; i < data.ids.size(); ++i) {
+    data.created_frames.push_back(vocabulary.createdFrame(data.ids[i]));
+    std::memcpy(data.descriptors.ptr<float>(int(i)), vocabulary.descriptor(data.ids[i]),
+                4 * std::size_t(data.dim));
+  }
+  return data;
+}
+
+void writeVocabularyFile(const std::filesystem::path& path, const VocabularyData& data) {
+  checkData(data);
+  const std::string header = headerBytes(data);
+  const std::string payload = payloadBytes(data);
+  std::ofstream file(path, std::ios::binary | std::ios::trunc);
+  if (!file) throw Error(ErrorCode::kIo, "cannot write vocabulary file " + path.string());
+  {
+    boost::archive::binary_oarchive ar(file, kArchiveFlags);
+    ar.save_binary(kMagic, sizeof(kMagic));
+    const std::uint32_t version = kVocabularyFileVersion;
+    const auto header_length = static_cast<std::uint32_t>(header.size());
+    const std::uint32_t header_crc = crc32Of(header);
+    ar << version << header_length << header_crc;
+    ar.save_binary(header.data(), header.size());
+    const auto payload_length = static_cast<std::uint64_t>(payload.size());
+    const std::uint32_t payload_crc = crc32Of(payload);
+    ar << payload_length << payload_crc;
+    ar.save_binary(payload.data(), payload.size());
+  }
+  file.flush();
+  if (!file) throw Error(ErrorCode::kIo, "cannot write vocabulary file " + path.string());
+}
+
+VocabularyData readVocabularyFile(const std::filesystem::path& path,
+                                  const VocabularyExpectation& expect) {
+  std::error_code ec;
+  const auto file_size = std::filesystem::file_size(path, ec);
+  std::ifstream file(path, std::ios::binary);
+  if (ec || !file) throw Error(ErrorCode::kIo, "cannot read vocabulary file " + path.string());
+  try {
+    boost::archive::binary_iarchive ar(file, kArchiveFlags);
+    std::uintmax_t consumed = 0;
+    char magic[sizeof(kMagic)];
+    if (file_size < sizeof(kMagic)) refuse(path, "truncated before the magic number");
+    ar.load_binary(magic, sizeof(magic));
+    if (std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) refuse(path, "wrong magic number");
+    std::uint32_t version = 0, header_length = 0, header_crc = 0;
+    ar >> version;
+    if (version != kVocabularyFileVersion) {
+      refuse(path, "unsupported format version " + std::to_string(version) +
+                       " (this reader: " + std::to_string(kVocabularyFileVersion) + ")");
+    }
+    ar >> header_length >> header_crc;
+    consumed = sizeof(kMagic) + 12;
+    if (header_length > kMaxHeaderBytes || header_length > file_size - consumed) {
+      refuse(path, "truncated or oversized header (" + std::to_string(header_length) + " bytes)");
+    }
+    std::string header(header_length, '\0');
+    ar.load_binary(header.data(), header_length);
+    consumed += header_length;
+    if (crc32Of(header) != header_crc) refuse(path, "header checksum mismatch");
+
+    VocabularyData data;
+    std::uint64_t count = 0;
+    try {
+      HeaderParser parse(header);
+      data.extractor = parse.getString();
+      data.type = static_cast<DescriptorType>(parse.get<std::uint8_t>());
+      data.dim = parse.get<std::int32_t>();
+      data.unit = static_cast<DistanceUnit>(parse.get<std::uint8_t>());
+      count = parse.get<std::uint64_t>();
+      const auto settings = parse.get<std::uint32_t>();
+      for (std::uint32_t i = 0; i < settings; ++i) {
+        std::string key = parse.getString();
+        data.settings[key] = parse.getString();
+      }
+      if (!parse.done()) throw std::runtime_error("trailing bytes in the header");
+    } catch (const std::runtime_error& e) {
+      refuse(path, e.what());
+    }
+    if (!expect.extractor.empty() && data.extractor != expect.extractor) {
+      refuse(path, "extractor " + data.extractor + ", map uses " + expect.extractor);
+    }
+    if (data.type != DescriptorType::kFloat32) refuse(path, "descriptors are not 32-bit floats");
+    if (data.dim < 1 || data.dim > 4096)
+      refuse(path, "invalid dimension " + std::to_string(data.dim));
+    if (expect.dim != 0 && data.dim != expect.dim) {
+      refuse(path,
+             "dimension " + std::to_string(data.dim) + ", map uses " + std::to_string(expect.dim));
+    }
+    if (data.unit != DistanceUnit::kSquared && data.unit != DistanceUnit::kEuclidean) {
+      refuse(path, "unknown distance unit");
+    }
+    std::uint64_t payload_length = 0;
+    std::uint32_t payload_crc = 0;
+    if (file_size - consumed < 12) refuse(path, "truncated before the payload");
+    ar >> payload_length >> payload_crc;
+    consumed += 12;
+    const std::uint64_t word_bytes = 16 + 4 * std::uint64_t(data.dim);
+    if (count > (file_size - consumed) / word_bytes || payload_length != count * word_bytes) {
+      refuse(path, "word count " + std::to_string(count) + " does not fit the payload");
+    }
+    if (payload_length != file_size - consumed) {
+      refuse(path, payload_length > file_size - consumed ? "truncated payload"
+                                                         : "trailing bytes after the payload");
+    }
+    std::string payload(payload_length, '\0');
+    ar.load_binary(payload.data(), payload_length);
+    if (crc32Of(payload) != payload_crc) refuse(path, "payload checksum mismatch");
+
+    const std::size_t n = count;
+    data.ids.resize(n);
+    data.created_frames.resize(n);
+    data.descriptors.create(int(n), data.dim, CV_32F);
+    std::memcpy(data.ids.data(), payload.data(), n * 8);
+    std::memcpy(data.created_frames.data(), payload.data() + n * 8, n * 8);
+    if (n > 0) std::memcpy(data.descriptors.data, payload.data() + n * 16, n * 4 * data.dim);
+    return data;
+  } catch (const Error&) {
+    throw;
+  } catch (const boost::archive::archive_exception& e) {
+    refuse(path, std::string("unreadable archive (") + e.what() + ")");
+  } catch (const std::exception& e) {
+    refuse(path, e.what());
+  }
+}
+
+void writeVocabularyText(const std::filesystem::path& path, const VocabularyData& data) {
+  checkData(data);
+  std::FILE* file = std::fopen(path.c_str(), "w");
+  if (!file) throw Error(ErrorCode::kIo, "cannot write vocabulary text " + path.string());
+  bool ok = true;
+  for (std::size_t i = 0; i < data.ids.size() && ok; ++i) {
+    ok = std::fprintf(file, "%lld", static_cast<long long>(data.ids[i])) > 0;
+    const float* row = data.descriptors.ptr<float>(int(i));
+    for (int d = 0; d < data.dim && ok; ++d) ok = std::fprintf(file, " %.9g", row[d]) > 0;
+    ok = ok && std::fputc('\n', file) != EOF;
+  }
+  ok = (std::fclose(file) == 0) && ok;
+  if (!ok) throw Error(ErrorCode::kIo, "cannot write vocabulary text " + path.string());
+}
+
+VocabularyData readVocabularyText(const std::filesystem::path& path, int expected_dim) {
+  std::ifstream file(path);
+  if (!file) throw Error(ErrorCode::kIo, "cannot read vocabulary text " + path.string());
+  VocabularyData data;
+  data.dim = expected_dim;
+  std::vector<float> values;
+  std::string line;
+  for (std::size_t line_number = 1; std::getline(file, line); ++line_number) {
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    const std::string where = "line " + std::to_string(line_number) + ": ";
+    const char* at = line.c_str();
+    char* end = nullptr;
+    errno = 0;
+    const long long id = std::strtoll(at, &end, 10);
+    if (end == at || errno != 0 || id < 0) refuse(path, where + "bad word id");
+    std::vector<float> row;
+    for (at = end;;) {
+      while (*at == ' ' || *at == '\t' || *at == '\r') ++at;
+      if (*at == '\0') break;
+      const float v = std::strtof(at, &end);  // denormals set ERANGE yet read back exactly
+      if (end == at || !std::isfinite(v)) refuse(path, where + "bad number");
+      row.push_back(v);
+      at = end;
+    }
+    if (data.dim == 0) data.dim = static_cast<int>(row.size());
+    if (row.empty() || int(row.size()) != data.dim) {
+      refuse(path,
+             where + std::to_string(row.size()) + " values, expected " + std::to_string(data.dim));
+    }
+    data.ids.push_back(id);
+    data.created_frames.push_back(-1);
+    values.insert(values.end(), row.begin(), row.end());
+  }
+  if (data.dim <= 0) refuse(path, "no word");
+  data.descriptors = cv::Mat(int(data.ids.size()), data.dim, CV_32F);
+  if (!values.empty()) std::memcpy(data.descriptors.data, values.data(), values.size() * 4);
+  return data;
+}
+
+}  // namespace placedb::vocab

@@ -1,0 +1,65 @@
+#pragma once
+// The vocabulary file: a Boost.Serialization binary archive (no archive header, so the bytes do not
+// depend on the Boost version) laid out as
+//   magic "PLDBVOC1" (8 bytes) | u32 format version
+//   u32 header length | u32 CRC-32 of the header | header
+//       header = extractor, descriptor type, dimension, distance unit, word count,
+//                settings (sorted key/value strings)
+//   u64 payload length | u32 CRC-32 of the payload | payload
+//       payload = word ids (i64 x n), created frames (i64 x n), descriptors (f32 x n x dim,
+//       row-major)
+// Integers are the machine's (little-endian on every supported target). The reader refuses in
+// that order -- magic, version, header size/checksum, extractor, type, dimension, payload size
+// against the file length, payload checksum -- before allocating anything sized by the file, so a
+// damaged file costs at most its own length. Same content gives byte-identical files: there is
+// no timestamp anywhere.
+//
+// The text form is RTAB-Map's dictionary export: one word a line, "WordID d1 ... dN", floats in
+// %.9g so that they read back bit for bit. It holds no created frames (read back as -1).
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "features/features.h"
+#include "vocabulary/vocabulary.h"
+
+namespace placedb::vocab {
+
+constexpr std::uint32_t kVocabularyFileVersion = 1;
+
+struct VocabularyData {
+  std::string extractor;
+  DescriptorType type = DescriptorType::kFloat32;
+  int dim = 0;
+  DistanceUnit unit = DistanceUnit::kSquared;
+  std::map<std::string, std::string> settings;
+  std::vector<std::int64_t> ids;
+  std::vector<std::int64_t> created_frames;
+  cv::Mat descriptors;  // ids.size() x dim, CV_32F
+};
+
+// What the reader insists on; empty extractor / zero dimension accept any.
+struct VocabularyExpectation {
+  std::string extractor;
+  int dim = 0;
+};
+
+// The words in RAM, ascending ids, with the vocabulary's settings.
+VocabularyData snapshotOf(const Vocabulary& vocabulary);
+
+// Throws placedb::Error(kIo) when the file cannot be written, kInvalidArgument on inconsistent
+// data.
+void writeVocabularyFile(const std::filesystem::path& path, const VocabularyData& data);
+// Throws placedb::Error(kVocabularyRefused) naming the file and the reason, kIo if unreadable.
+VocabularyData readVocabularyFile(const std::filesystem::path& path,
+                                  const VocabularyExpectation& expect = {});
+
+void writeVocabularyText(const std::filesystem::path& path, const VocabularyData& data);
+// expected_dim 0: taken from the first line. Throws kVocabularyRefused on a malformed line.
+VocabularyData readVocabularyText(const std::filesystem::path& path, int expected_dim = 0);
+
+}  // namespace placedb::vocab

@@ -1,0 +1,205 @@
+// The vocabulary file: round trip, byte-identical rewrites, and every refusal as a typed error.
+#include <gtest/gtest.h>
+
+#include <boost/crc.hpp>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <random>
+
+#include "placedb/error.h"
+#include "test_paths.h"
+#include "vocabulary/vocabulary_file.h"
+
+namespace placedb::vocab {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string readBytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+void writeBytes(const fs::path& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+}
+
+// A small vocabulary grown by quantisation, so ids, frames and settings are all non-trivial.
+VocabularyData sampleData(int dim = 8) {
+  VocabularyOptions o;
+  o.t_nd2 = 0.02f;
+  Vocabulary v(o, dim, "surf-test-v1");
+  std::mt19937 rng(3);
+  std::normal_distribution<float> gauss(0.f, 1.f);
+  for (int frame = 0; frame < 4; ++frame) {
+    cv::Mat image(30, dim, CV_32F);
+    for (int i = 0; i < image.rows; ++i) {
+      for (int d = 0; d < dim; ++d) image.at<float>(i, d) = gauss(rng);
+      cv::normalize(image.row(i), image.row(i));
+    }
+    v.quantize(image, 100 + frame);
+  }
+  v.erase({1, 2});
+  return snapshotOf(v);
+}
+
+ErrorCode codeOf(const std::function<void()>& f, std::string* message = nullptr) {
+  try {
+    f();
+  } catch (const Error& e) {
+    if (message) *message = e.what();
+    return e.code();
+  } catch (...) {
+    return ErrorCode::kInternal;
+  }
+  return ErrorCode(0);
+}
+
+void expectSameData(const VocabularyData& a, const VocabularyData& b) {
+  EXPECT_EQ(a.extractor, b.extractor);
+  EXPECT_EQ(a.type, b.type);
+  EXPECT_EQ(a.dim, b.dim);
+  EXPECT_EQ(a.unit, b.unit);
+  EXPECT_EQ(a.settings, b.settings);
+  EXPECT_EQ(a.ids, b.ids);
+  EXPECT_EQ(a.created_frames, b.created_frames);
+  ASSERT_EQ(a.descriptors.size(), b.descriptors.size());
+  EXPECT_EQ(std::memcmp(a.descriptors.data, b.descriptors.data, a.descriptors.total() * 4), 0);
+}
+
+class VocabularyFile : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = testing::scratchDir("vocabulary_file");
+    data_ = sampleData();
+    path_ = dir_ / "words.pvoc";
+    writeVocabularyFile(path_, data_);
+    bytes_ = readBytes(path_);
+  }
+  // Writes `bytes` to a new file and returns the refusal message (fails if not refused).
+  std::string refusal(const std::string& bytes, VocabularyExpectation expect = {}) {
+    const fs::path damaged = dir_ / "damaged.pvoc";
+    writeBytes(damaged, bytes);
+    std::string message;
+    EXPECT_EQ(codeOf([&] { readVocabularyFile(damaged, expect); }, &message),
+              ErrorCode::kVocabularyRefused)
+        << "size " << bytes.size();
+    EXPECT_NE(message.find(damaged.string()), std::string::npos) << message;
+    return message;
+  }
+  fs::path dir_, path_;
+  VocabularyData data_;
+  std::string bytes_;
+};
+
+TEST_F(VocabularyFile, RoundTripIsExactAndRewritesAreByteIdentical) {
+  ASSERT_GT(data_.ids.size(), 50u);
+  EXPECT_EQ(data_.settings.at("rule"), "greedy");
+  EXPECT_EQ(data_.created_frames.front(), 100);
+  const VocabularyData back = readVocabularyFile(path_, {"surf-test-v1", 8});
+  expectSameData(data_, back);
+  writeVocabularyFile(dir_ / "again.pvoc", back);
+  EXPECT_EQ(readBytes(dir_ / "again.pvoc"), bytes_);
+  writeVocabularyFile(dir_ / "twice.pvoc", data_);
+  EXPECT_EQ(readBytes(dir_ / "twice.pvoc"), bytes_);
+}
+
+TEST_F(VocabularyFile, EmptyVocabularyRoundTrips) {
+  VocabularyData empty;
+  empty.extractor = "surf";
+  empty.dim = 64;
+  writeVocabularyFile(dir_ / "empty.pvoc", empty);
+  const VocabularyData back = readVocabularyFile(dir_ / "empty.pvoc", {"surf", 64});
+  EXPECT_TRUE(back.ids.empty());
+  EXPECT_EQ(back.dim, 64);
+}
+
+TEST_F(VocabularyFile, RefusesWrongMagic) {
+  std::string bytes = bytes_;
+  bytes[0] = 'X';
+  EXPECT_NE(refusal(bytes).find("magic"), std::string::npos);
+  EXPECT_NE(refusal("garbage that is not a vocabulary at all").find("magic"), std::string::npos);
+}
+
+TEST_F(VocabularyFile, RefusesUnsupportedVersion) {
+  std::string bytes = bytes_;
+  const std::uint32_t future = 2;
+  std::memcpy(&bytes[8], &future, 4);
+  EXPECT_NE(refusal(bytes).find("version 2"), std::string::npos);
+}
+
+TEST_F(VocabularyFile, RefusesWrongDimensionAndExtractor) {
+  EXPECT_NE(refusal(bytes_, {"", 64}).find("dimension 8, map uses 64"), std::string::npos);
+  EXPECT_NE(refusal(bytes_, {"orb", 0}).find("extractor surf-test-v1, map uses orb"),
+            std::string::npos);
+}
+
+TEST_F(VocabularyFile, RefusesBitFlipsAnywhere) {
+  // Two header bytes, a descriptor byte, the last byte.
+  for (std::size_t at : {std::size_t(25), std::size_t(40), bytes_.size() / 2, bytes_.size() - 1}) {
+    std::string bytes = bytes_;
+    bytes[at] ^= 0x10;
+    const std::string message = refusal(bytes);
+    EXPECT_NE(message.find("checksum"), std::string::npos) << "byte " << at << ": " << message;
+  }
+}
+
+TEST_F(VocabularyFile, RefusesTruncationAtAnyLength) {
+  for (std::size_t length :
+       {std::size_t(0), std::size_t(3), std::size_t(8), std::size_t(11), std::size_t(15),
+        std::size_t(30), bytes_.size() / 3, bytes_.size() - 4, bytes_.size() - 1}) {
+    refusal(bytes_.substr(0, length));
+  }
+  refusal(bytes_ + "extra");
+}
+
+TEST_F(VocabularyFile, RefusesHugeDeclaredSizesWithoutAllocating) {
+  // A header claiming 2^60 words, with a valid checksum so that only the size check can stop it.
+  std::string bytes = bytes_;
+  std::uint32_t header_length = 0;
+  std::memcpy(&header_length, &bytes[12], 4);
+  std::string header = bytes.substr(20, header_length);
+  const std::size_t count_at = 4 + data_.extractor.size() + 1 + 4 + 1;
+  const std::uint64_t huge = std::uint64_t(1) << 60;
+  std::memcpy(&header[count_at], &huge, 8);
+  boost::crc_32_type crc;
+  crc.process_bytes(header.data(), header.size());
+  const std::uint32_t checksum = crc.checksum();
+  bytes.replace(20, header_length, header);
+  std::memcpy(&bytes[16], &checksum, 4);
+  EXPECT_NE(refusal(bytes).find("does not fit"), std::string::npos);
+
+  std::string long_header = bytes_;
+  const std::uint32_t enormous = 0xfffffff0u;
+  std::memcpy(&long_header[12], &enormous, 4);
+  refusal(long_header);
+}
+
+TEST_F(VocabularyFile, MissingFileIsAnIoError) {
+  EXPECT_EQ(codeOf([&] { readVocabularyFile(dir_ / "absent.pvoc"); }), ErrorCode::kIo);
+}
+
+TEST_F(VocabularyFile, TextExportRoundTripsBitForBit) {
+  const fs::path text = dir_ / "words.txt";
+  writeVocabularyText(text, data_);
+  const VocabularyData back = readVocabularyText(text, 8);
+  EXPECT_EQ(back.ids, data_.ids);
+  ASSERT_EQ(back.descriptors.size(), data_.descriptors.size());
+  EXPECT_EQ(
+      std::memcmp(back.descriptors.data, data_.descriptors.data, data_.descriptors.total() * 4), 0);
+  std::string first_line;
+  std::getline(std::ifstream(text) >> std::ws, first_line);
+  EXPECT_EQ(first_line.rfind(std::to_string(data_.ids[0]) + " ", 0), 0u) << first_line;
+
+  writeBytes(dir_ / "bad.txt", "0 1 2 3 4 5 6 7 8\n1 1 2 3\n");
+  std::string message;
+  EXPECT_EQ(codeOf([&] { readVocabularyText(dir_ / "bad.txt"); }, &message),
+            ErrorCode::kVocabularyRefused);
+  EXPECT_NE(message.find("line 2"), std::string::npos) << message;
+  writeBytes(dir_ / "bad2.txt", "0 1 x\n");
+  EXPECT_EQ(codeOf([&] { readVocabularyText(dir_ / "bad2.txt"); }), ErrorCode::kVocabularyRefused);
+}
+
+}  // namespace
+}  // namespace placedb::vocab
