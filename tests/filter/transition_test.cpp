@@ -1,7 +1,9 @@
 // Link graph walks and the sparse banded prediction rows.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <numeric>
 #include <random>
 
@@ -183,9 +185,31 @@ TEST(Prediction, MassStaysWithin16LinksAndSumsToOne) {
   for (std::size_t k = 1; k < state.posterior.size(); ++k) mass += state.posterior[k].second;
   for (std::size_t k = 1; k < state.posterior.size(); ++k) state.posterior[k].second *= 0.75 / mass;
   filter.restore(state);
+  const auto fast = filter.predict(partial_wm, rg);
   total = 0.0;
-  for (const auto& entry : filter.predict(partial_wm, rg)) total += entry.second;
+  for (const auto& entry : fast) total += entry.second;
   EXPECT_NEAR(total, 1.0, 1e-12);
+
+  // The filter's compact walk must give exactly what the reference rows give: p(-1|-1) p(-1) +
+  // 0.1 sum p(j) for the new place, p(-1) (1 - 0.9)/M + sum_j p(j) row_j(i) for location i, with
+  // the terms added in the same order (new place first, then j ascending).
+  const TransitionModel model{BayesFilterSettings{}};
+  const auto in_wm = [&partial_wm](LocationId id) {
+    return std::binary_search(partial_wm.begin(), partial_wm.end(), id);
+  };
+  std::map<LocationId, double> reference;
+  double location_mass = 0.0;
+  for (std::size_t k = 1; k < state.posterior.size(); ++k)
+    location_mass += state.posterior[k].second;
+  reference[kNewPlace] = 0.9 * 0.25 + 0.1 * location_mass;
+  for (LocationId id : partial_wm) reference[id] = 0.25 * ((1.0 - 0.9) / partial_wm.size());
+  for (std::size_t k = 1; k < state.posterior.size(); ++k) {
+    const auto& [j, mass] = state.posterior[k];
+    for (const auto& [i, p] : model.fromLocation(j, rg, in_wm).to_locations)
+      reference[i] += mass * p;
+  }
+  ASSERT_EQ(fast.size(), reference.size());
+  for (const auto& [id, p] : fast) EXPECT_EQ(p, reference.at(id)) << id;
 }
 
 }  // namespace

@@ -117,14 +117,9 @@ std::vector<double> BayesFilter::predictDense(const std::vector<LocationId>& sor
   const double from_new_place = prior_new_place * transitions_.newPlaceToEachLocation(m);
   for (std::size_t k = 0; k < m; ++k) predicted[k + 1] = from_new_place;
 
-  const auto in_wm = [&sorted_wm](LocationId id) {
-    return std::binary_search(sorted_wm.begin(), sorted_wm.end(), id);
-  };
+  WmNeighbourhoods neighbourhoods(sorted_wm, graph);
   for (const auto& [k, mass] : prior_locations) {
-    const PredictionRow row = transitions_.fromLocation(sorted_wm[k], graph, in_wm);
-    for (const auto& [i, p] : row.to_locations) {
-      predicted[static_cast<std::size_t>(indexOf(sorted_wm, i)) + 1] += mass * p;
-    }
+    transitions_.spreadFrom(k, mass, neighbourhoods, predicted);
   }
   return predicted;
 }

@@ -45,6 +45,12 @@ std::vector<LocationId> LinkGraph::neighbours(LocationId id) const {
   return {it->second.begin(), it->second.end()};
 }
 
+const std::set<LocationId>& LinkGraph::neighbourSet(LocationId id) const {
+  static const std::set<LocationId> kNone;
+  auto it = adjacency_.find(id);
+  return it == adjacency_.end() ? kNone : it->second;
+}
+
 std::vector<std::pair<LocationId, int>> LinkGraph::withinLinks(LocationId start, int max_depth,
                                                                const NodeFilter& allowed) const {
   std::vector<std::pair<LocationId, int>> found;

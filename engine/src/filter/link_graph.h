@@ -27,6 +27,8 @@ class LinkGraph {
   std::size_t nodeCount() const { return adjacency_.size(); }
   // Sorted; empty when the node is absent.
   std::vector<LocationId> neighbours(LocationId id) const;
+  // The same without a copy (an empty set when the node is absent).
+  const std::set<LocationId>& neighbourSet(LocationId id) const;
 
   // Nodes within max_depth links of start (start itself at depth 0), walking only through nodes
   // the filter accepts (start included: nothing is returned when start is refused or absent).
