@@ -17,7 +17,11 @@ WordChanges InvertedIndex::add(LocationId location, const Signature& signature) 
   for (const auto& e : signature.entries()) {
     auto& list = postings_[e.word];
     if (list.empty()) changes.referenced.push_back(e.word);
-    list.push_back({location, e.count});
+    // Kept sorted by location: new locations have the largest ids, so this is nearly always an
+    // append; a location retrieved from LTM lands in the middle.
+    auto pos = std::lower_bound(list.begin(), list.end(), location,
+                                [](const Posting& p, LocationId id) { return p.location < id; });
+    list.insert(pos, {location, e.count});
   }
   signatures_.emplace(location, signature);
   return changes;  // entries are sorted by word, so the list is too
@@ -38,17 +42,14 @@ WordChanges InvertedIndex::remove(LocationId location) {
                                             " has no postings");
     }
     auto& list = word_it->second;
-    auto pos = std::find_if(list.begin(), list.end(),
-                            [location](const Posting& p) { return p.location == location; });
-    if (pos == list.end()) {
+    auto pos = std::lower_bound(list.begin(), list.end(), location,
+                                [](const Posting& p, LocationId id) { return p.location < id; });
+    if (pos == list.end() || pos->location != location) {
       throw Error(ErrorCode::kInternal, "inverted index: posting of location " +
                                             std::to_string(location) + " missing for word " +
                                             std::to_string(e.word));
     }
-    // Order inside a posting list carries no meaning, so swap-and-pop keeps removal O(1) after
-    // find.
-    *pos = list.back();
-    list.pop_back();
+    list.erase(pos);
     if (list.empty()) {
       postings_.erase(word_it);
       changes.unreferenced.push_back(e.word);
@@ -90,28 +91,15 @@ std::vector<LocationSimilarity> InvertedIndex::similarities(const Signature& que
                                                             const CandidateFilter& accept) const {
   // Integer pair counts are order-independent, so the hash map cannot change the results.
   std::unordered_map<LocationId, std::int64_t> paired;
-  std::unordered_map<LocationId, bool> accepted_cache;
   for (const auto& e : query.entries()) {
     auto word_it = postings_.find(e.word);
     if (word_it == postings_.end()) continue;
-    for (const Posting& p : word_it->second) {
-      if (accept) {
-        auto cached = accepted_cache.find(p.location);
-        bool ok;
-        if (cached == accepted_cache.end()) {
-          ok = accept(p.location);
-          accepted_cache.emplace(p.location, ok);
-        } else {
-          ok = cached->second;
-        }
-        if (!ok) continue;
-      }
-      paired[p.location] += std::min(e.count, p.count);
-    }
+    for (const Posting& p : word_it->second) paired[p.location] += std::min(e.count, p.count);
   }
   std::vector<LocationSimilarity> out;
   out.reserve(paired.size());
   for (const auto& [location, n_pair] : paired) {
+    if (accept && !accept(location)) continue;  // consulted once per location touched
     const std::int64_t size = signatures_.at(location).featureCount();
     out.push_back({location, similarityFromCounts(n_pair, query.featureCount(), size), n_pair});
   }

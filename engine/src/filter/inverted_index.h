@@ -56,8 +56,8 @@ class InvertedIndex {
     LocationId location;
     std::int32_t count;
   };
-  // Postings per word; a word with no posting is erased, so the map's keys are the referenced
-  // words.
+  // Postings per word, sorted by location; a word with no posting is erased, so the map's keys
+  // are the referenced words.
   std::unordered_map<WordId, std::vector<Posting>> postings_;
   std::unordered_map<LocationId, Signature> signatures_;
 };
