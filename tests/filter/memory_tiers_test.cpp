@@ -133,6 +133,10 @@ TEST(MemoryTiers, RetrievalCandidatesAreLtmNeighboursUpToTheCap) {
   // 4 is in WM, 9 is unknown, 3 repeats: only LTM ones, in the caller's order, at most 2.
   EXPECT_EQ(m.retrievalCandidates(1, {4, 3, 9, 3, 5, 2}), (std::vector<MemoryLocationId>{3, 5}));
   EXPECT_TRUE(m.retrievalCandidates(-1, {3, 5}).empty());  // no hypothesis
+  EXPECT_EQ(m.retrievalCandidates(1, {4, 3, 9, 3, 5, 2}, 3),
+            (std::vector<MemoryLocationId>{3, 5, 2}));
+  EXPECT_EQ(parseTier(toString(Tier::kLtm)), Tier::kLtm);
+  EXPECT_THROW(parseTier("dram"), Error);
   EXPECT_THROW(m.retrieveToWm({4}), Error);
 }
 

@@ -43,7 +43,7 @@ struct Likelihood {
   std::size_t nonzero = 0;
   bool degenerate = false;          // no non-zero similarity, or sigma ~ 0
   double new_place = 1.0;           // p(I_t | S_t=-1)
-  std::vector<double> of_location;  // p(I_t | S_t=i), aligned with the WM ids given
+  std::vector<double> of_location;  // p(I_t | S_t=i), WM ids ascending (as posterior())
 };
 
 // The whole filter state: restoring it makes the next updates bit-identical to an uninterrupted

@@ -27,6 +27,13 @@ const char* toString(Tier tier) {
   return "unknown";
 }
 
+Tier parseTier(const std::string& name) {
+  if (name == "stm") return Tier::kStm;
+  if (name == "wm") return Tier::kWm;
+  if (name == "ltm") return Tier::kLtm;
+  invalid("unknown tier '" + name + "'; valid: stm, wm, ltm");
+}
+
 void MemorySettings::validate() const {
   std::ostringstream problems;
   if (stm_size < 0 || stm_size > 100000) problems << " stm_size=" << stm_size << " (0..100000);";
@@ -196,10 +203,17 @@ void MemoryTiers::transferToLtm(const std::vector<MemoryLocationId>& ids) {
 
 std::vector<MemoryLocationId> MemoryTiers::retrievalCandidates(
     MemoryLocationId best_hypothesis, const std::vector<MemoryLocationId>& ltm_neighbours) const {
+  return retrievalCandidates(best_hypothesis, ltm_neighbours,
+                             static_cast<std::size_t>(settings_.max_retrieved));
+}
+
+std::vector<MemoryLocationId> MemoryTiers::retrievalCandidates(
+    MemoryLocationId best_hypothesis, const std::vector<MemoryLocationId>& ltm_neighbours,
+    std::size_t max_retrieved) const {
   std::vector<MemoryLocationId> chosen;
   if (best_hypothesis < 0) return chosen;  // no hypothesis, nothing to bring back
   for (MemoryLocationId id : ltm_neighbours) {
-    if (chosen.size() >= static_cast<std::size_t>(settings_.max_retrieved)) break;
+    if (chosen.size() >= max_retrieved) break;
     if (ltm_.count(id) == 0) continue;
     if (std::find(chosen.begin(), chosen.end(), id) != chosen.end()) continue;
     chosen.push_back(id);

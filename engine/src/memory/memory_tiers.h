@@ -29,6 +29,7 @@ using MemoryLocationId = std::int64_t;
 
 enum class Tier : std::uint8_t { kStm = 0, kWm = 1, kLtm = 2 };
 const char* toString(Tier tier);
+Tier parseTier(const std::string& name);  // "stm", "wm", "ltm"; kInvalidArgument otherwise
 
 struct MemorySettings {
   int stm_size = 10;                 // RTAB-Map's Mem/STMSize
@@ -93,6 +94,10 @@ class MemoryTiers {
   // really in LTM, without repeats, at most max_retrieved.
   std::vector<MemoryLocationId> retrievalCandidates(
       MemoryLocationId best_hypothesis, const std::vector<MemoryLocationId>& ltm_neighbours) const;
+  // The same with an explicit cap instead of settings().max_retrieved.
+  std::vector<MemoryLocationId> retrievalCandidates(
+      MemoryLocationId best_hypothesis, const std::vector<MemoryLocationId>& ltm_neighbours,
+      std::size_t max_retrieved) const;
   // Moves these LTM locations to WM and marks them retrieved this frame.
   void retrieveToWm(const std::vector<MemoryLocationId>& ids);
 
