@@ -91,7 +91,7 @@ bool Vocabulary::decideNewWord(const std::vector<Neighbor>& best) const {
 void Vocabulary::addWord(std::int64_t id, std::int64_t created_frame, const float* descriptor,
                          bool split) {
   const std::uint32_t slot = store_.add(id, created_frame, descriptor);
-  slot_of_.emplace(id, slot);
+  slot_of_.set(id, slot);
   if (split) {
     forest_->insert(slot);
   } else {
@@ -195,30 +195,31 @@ void Vocabulary::erase(const std::vector<std::int64_t>& ids) {
   }
   touched_ = true;
   for (std::int64_t id : ids) {
-    auto it = slot_of_.find(id);
-    if (it == slot_of_.end()) continue;  // listed twice
-    forest_->remove(it->second);
-    store_.release(it->second);
-    slot_of_.erase(it);
+    const std::uint32_t slot = slot_of_.find(id);
+    if (slot == IdTable::kNone) continue;  // listed twice
+    forest_->remove(slot);
+    store_.release(slot);
+    slot_of_.erase(id);
   }
 }
 
 const float* Vocabulary::descriptor(std::int64_t id) const {
-  auto it = slot_of_.find(id);
-  return it == slot_of_.end() ? nullptr : store_.data(it->second);
+  const std::uint32_t slot = contains(id) ? slot_of_.find(id) : IdTable::kNone;
+  return slot == IdTable::kNone ? nullptr : store_.data(slot);
 }
 
 std::int64_t Vocabulary::createdFrame(std::int64_t id) const {
-  auto it = slot_of_.find(id);
-  return it == slot_of_.end() ? -1 : store_.createdFrame(it->second);
+  const std::uint32_t slot = contains(id) ? slot_of_.find(id) : IdTable::kNone;
+  return slot == IdTable::kNone ? -1 : store_.createdFrame(slot);
 }
 
-std::vector<std::int64_t> Vocabulary::ids() const {
-  std::vector<std::int64_t> out;
-  out.reserve(slot_of_.size());
-  for (const auto& entry : slot_of_) out.push_back(entry.first);
-  std::sort(out.begin(), out.end());
-  return out;
+std::vector<std::int64_t> Vocabulary::ids() const { return slot_of_.ids(); }
+
+void Vocabulary::setChecks(int checks) {
+  VocabularyOptions changed = options_;
+  changed.checks = checks;
+  changed.validate();
+  options_ = changed;
 }
 
 std::vector<std::pair<std::int64_t, float>> Vocabulary::knn(const float* query, int k) const {
@@ -259,7 +260,8 @@ void Vocabulary::restore(const IndexState& state, const std::vector<std::int64_t
   const cv::Mat rows = descriptors.isContinuous() ? descriptors : descriptors.clone();
   std::int64_t max_id = -1;
   for (std::size_t i = 0; i < ids.size(); ++i) {
-    require(!contains(ids[i]), "restore: word " + std::to_string(ids[i]) + " given twice");
+    require(ids[i] >= 0 && !contains(ids[i]),
+            "restore: word " + std::to_string(ids[i]) + " negative or given twice");
     addWord(ids[i], created_frames[i], rows.ptr<float>(int(i)), false);
     max_id = std::max(max_id, ids[i]);
   }

@@ -22,12 +22,12 @@
 #include <map>
 #include <memory>
 #include <string>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
 
+#include "vocabulary/id_table.h"
 #include "vocabulary/kd_forest.h"
 #include "vocabulary/slot_store.h"
 
@@ -98,7 +98,7 @@ class Vocabulary {
   // Unknown ids are an error (kInvalidArgument).
   void erase(const std::vector<std::int64_t>& ids);
 
-  bool contains(std::int64_t id) const { return slot_of_.count(id) != 0; }
+  bool contains(std::int64_t id) const { return id >= 0 && slot_of_.find(id) != IdTable::kNone; }
   std::size_t size() const { return slot_of_.size(); }
   std::int64_t nextWordId() const { return next_word_id_; }
   const float* descriptor(std::int64_t id) const;    // nullptr if not in RAM
@@ -107,6 +107,10 @@ class Vocabulary {
   int dim() const { return dim_; }
   const VocabularyOptions& options() const { return options_; }
   const std::string& extractorSignature() const { return extractor_; }
+
+  // Search effort: changes no index state, but does change approximate answers, so a resumed run
+  // must use the same value to stay bit-identical. Throws kInvalidArgument outside [1, 1000000].
+  void setChecks(int checks);
 
   // The k nearest words (approximate, `checks` of the options), plain Euclidean distances.
   std::vector<std::pair<std::int64_t, float>> knn(const float* query, int k) const;
@@ -134,7 +138,7 @@ class Vocabulary {
   std::string extractor_;
   SlotStore store_;
   std::unique_ptr<KdForest> forest_;
-  std::unordered_map<std::int64_t, std::uint32_t> slot_of_;
+  IdTable slot_of_;
   std::int64_t next_word_id_ = 0;
   bool touched_ = false;
 };
