@@ -1,0 +1,86 @@
+#include "synthetic/camera_model.h"
+
+#include <cmath>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+namespace placedb::synthetic {
+
+CameraIntrinsics CameraIntrinsics::fromHorizontalFov(int width, int height, double hfov_radians) {
+  CameraIntrinsics camera;
+  camera.width = width;
+  camera.height = height;
+  camera.focal = 0.5 * width / std::tan(0.5 * hfov_radians);
+  camera.cx = 0.5 * width;
+  camera.cy = 0.5 * height;
+  return camera;
+}
+
+double CameraIntrinsics::verticalFov() const { return 2.0 * std::atan(0.5 * height / focal); }
+
+cv::Matx33d imageToGround(const Pose& pose, const CameraIntrinsics& camera) {
+  const double ch = std::cos(pose.heading), sh = std::sin(pose.heading);
+  const double cp = std::cos(pose.pitch), sp = std::sin(pose.pitch);
+  const cv::Vec3d forward(cp * ch, cp * sh, -sp);  // optical axis
+  const cv::Vec3d right(sh, -ch, 0);               // image +u
+  const cv::Vec3d down = forward.cross(right);     // image +v
+  // Ray of pixel (u, v): right*(u-cx)/f + down*(v-cy)/f + forward.
+  const double f = camera.focal;
+  const cv::Vec3d offset = forward - right * (camera.cx / f) - down * (camera.cy / f);
+  const cv::Matx33d rays(right[0] / f, down[0] / f, offset[0],  //
+                         right[1] / f, down[1] / f, offset[1],  //
+                         right[2] / f, down[2] / f, offset[2]);
+  // Ground point C + t*d with t = -h/d_z, scaled by -d_z to stay homogeneous.
+  const cv::Matx33d to_ground(pose.height, 0, -pose.x,  //
+                              0, pose.height, -pose.y,  //
+                              0, 0, -1);
+  return to_ground * rays;
+}
+
+cv::Matx33d groundToImage(const Pose& pose, const CameraIntrinsics& camera) {
+  return imageToGround(pose, camera).inv();
+}
+
+cv::Matx33d relativeHomography(const Pose& from, const Pose& to, const CameraIntrinsics& camera) {
+  return groundToImage(to, camera) * imageToGround(from, camera);
+}
+
+std::array<cv::Point2d, 4> groundFootprint(const Pose& pose, const CameraIntrinsics& camera) {
+  const cv::Matx33d h = imageToGround(pose, camera);
+  const double w = camera.width, ht = camera.height;
+  const cv::Vec3d corners[4] = {{0, 0, 1}, {w, 0, 1}, {w, ht, 1}, {0, ht, 1}};
+  std::array<cv::Point2d, 4> quad;
+  for (int k = 0; k < 4; ++k) {
+    const cv::Vec3d g = h * corners[k];
+    quad[k] = cv::Point2d(g[0] / g[2], g[1] / g[2]);
+  }
+  return quad;
+}
+
+double polygonArea(const std::array<cv::Point2d, 4>& quad) {
+  double twice = 0;
+  for (int k = 0; k < 4; ++k) {
+    const cv::Point2d& a = quad[k];
+    const cv::Point2d& b = quad[(k + 1) % 4];
+    twice += a.x * b.y - a.y * b.x;
+  }
+  return 0.5 * std::abs(twice);
+}
+
+double footprintOverlap(const std::array<cv::Point2d, 4>& a, const std::array<cv::Point2d, 4>& b) {
+  // Work relative to a's first corner so float precision holds far from the origin.
+  const cv::Point2d origin = a[0];
+  std::vector<cv::Point2f> pa, pb;
+  for (int k = 0; k < 4; ++k) {
+    pa.emplace_back(cv::Point2f(a[k] - origin));
+    pb.emplace_back(cv::Point2f(b[k] - origin));
+  }
+  std::vector<cv::Point2f> shared;
+  const double inter = cv::intersectConvexConvex(pa, pb, shared, true);
+  if (inter <= 0) return 0;
+  const double uni = polygonArea(a) + polygonArea(b) - inter;
+  return uni > 0 ? inter / uni : 0;
+}
+
+}  // namespace placedb::synthetic

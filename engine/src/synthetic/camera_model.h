@@ -1,0 +1,42 @@
+#pragma once
+// A pinhole camera above an infinite flat ground: every image is a homography of the ground.
+#include <array>
+
+#include <opencv2/core.hpp>
+
+namespace placedb::synthetic {
+
+// Ground coordinates are metres, x east, y north, z up; the ground is z = 0.
+struct Pose {
+  double x = 0, y = 0;
+  double heading = 0;  // radians, counter-clockwise from +x: the direction of travel
+  double height = 6;   // metres above the ground
+  double pitch = 1.0;  // radians below the horizon of the optical axis
+};
+
+struct CameraIntrinsics {
+  int width = 320, height = 240;
+  double focal = 277;  // pixels
+  double cx = 160, cy = 120;
+  static CameraIntrinsics fromHorizontalFov(int width, int height, double hfov_radians);
+  double verticalFov() const;
+};
+
+// Maps homogeneous pixel coordinates (u, v, 1) to homogeneous ground coordinates (x, y, 1).
+// Only valid while the whole image looks below the horizon (see lowestViewAngle()).
+cv::Matx33d imageToGround(const Pose& pose, const CameraIntrinsics& camera);
+cv::Matx33d groundToImage(const Pose& pose, const CameraIntrinsics& camera);
+
+// Pixels of image `from` to pixels of image `to`, exact for the flat ground.
+cv::Matx33d relativeHomography(const Pose& from, const Pose& to, const CameraIntrinsics& camera);
+
+// The ground quadrilateral seen by the image corners, in order top-left, top-right,
+// bottom-right, bottom-left (far edge first).
+std::array<cv::Point2d, 4> groundFootprint(const Pose& pose, const CameraIntrinsics& camera);
+
+double polygonArea(const std::array<cv::Point2d, 4>& quad);
+
+// Area shared by two footprints over the area of their union (intersection over union).
+double footprintOverlap(const std::array<cv::Point2d, 4>& a, const std::array<cv::Point2d, 4>& b);
+
+}  // namespace placedb::synthetic

@@ -1,0 +1,80 @@
+#include "synthetic/ground_truth.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <unordered_map>
+
+namespace placedb::synthetic {
+namespace {
+
+std::uint64_t cellKey(std::int64_t cx, std::int64_t cy) {
+  return (static_cast<std::uint64_t>(cx) << 32) ^ static_cast<std::uint64_t>(cy & 0xffffffff);
+}
+
+double headingDifference(double a, double b) {
+  const double d = std::remainder(a - b, 2 * CV_PI);
+  return std::abs(d);
+}
+
+}  // namespace
+
+std::vector<std::pair<int, int>> computeRevisits(const std::vector<Pose>& poses,
+                                                 const CameraIntrinsics& camera,
+                                                 const GroundTruthSettings& settings) {
+  const int n = static_cast<int>(poses.size());
+  std::vector<std::array<cv::Point2d, 4>> footprints(n);
+  std::vector<cv::Point2d> centres(n);
+  double extent = 0;  // the largest distance across any footprint
+  for (int i = 0; i < n; ++i) {
+    footprints[i] = groundFootprint(poses[i], camera);
+    centres[i] = 0.25 * (footprints[i][0] + footprints[i][1] + footprints[i][2] + footprints[i][3]);
+    for (int a = 0; a < 4; ++a) {
+      for (int b = a + 1; b < 4; ++b) {
+        const cv::Point2d d = footprints[i][a] - footprints[i][b];
+        extent = std::max(extent, std::hypot(d.x, d.y));
+      }
+    }
+  }
+  if (n == 0) return {};
+  // Two footprints with IoU >= 0.5 (or any positive bound below it, shifted) have centres much
+  // closer than one extent, so a cell of one extent and its eight neighbours hold every candidate.
+  const double cell = std::max(extent, 1e-6);
+  const double reach = extent;
+  std::unordered_map<std::uint64_t, std::vector<int>> grid;
+  auto cellOf = [&](cv::Point2d p) {
+    return std::make_pair(static_cast<std::int64_t>(std::floor(p.x / cell)),
+                          static_cast<std::int64_t>(std::floor(p.y / cell)));
+  };
+  std::vector<std::pair<int, int>> pairs;
+  for (int q = 0; q < n; ++q) {
+    // Frames become searchable once they are old enough to be a loop for q.
+    const int newly_old = q - settings.min_gap;
+    if (newly_old >= 0) {
+      const auto c = cellOf(centres[newly_old]);
+      grid[cellKey(c.first, c.second)].push_back(newly_old);
+    }
+    const auto c = cellOf(centres[q]);
+    const std::size_t first_of_q = pairs.size();
+    for (std::int64_t dy = -1; dy <= 1; ++dy) {
+      for (std::int64_t dx = -1; dx <= 1; ++dx) {
+        auto found = grid.find(cellKey(c.first + dx, c.second + dy));
+        if (found == grid.end()) continue;
+        for (int r : found->second) {
+          const cv::Point2d d = centres[q] - centres[r];
+          if (d.x * d.x + d.y * d.y > reach * reach) continue;
+          if (headingDifference(poses[q].heading, poses[r].heading) > settings.max_heading)
+            continue;
+          if (footprintOverlap(footprints[q], footprints[r]) >= settings.min_overlap) {
+            pairs.emplace_back(q, r);
+          }
+        }
+      }
+    }
+    std::sort(pairs.begin() + static_cast<std::ptrdiff_t>(first_of_q), pairs.end());
+  }
+  return pairs;
+}
+
+}  // namespace placedb::synthetic
