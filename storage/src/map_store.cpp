@@ -174,6 +174,8 @@ MapStore::MapStore(const std::string& path, OpenMode mode, const OpenOptions& op
       throw StorageError(ErrorCode::kStorage, "map " + path + ": cannot switch to WAL mode");
     }
     db_->exec("PRAGMA synchronous = NORMAL");
+    // 32 MB of page cache: the word index is updated at random places every frame.
+    db_->exec("PRAGMA cache_size = -32768");
     if (schemaVersion() < current) detail::applyMigrations(*db_, current);
     db_->exec("PRAGMA foreign_keys = ON");
   } catch (...) {
@@ -239,6 +241,17 @@ void MapStore::endSession(std::int64_t session_id, bool clean) {
   auto s = db_->cached(update.c_str());
   s->bind(1, session_id);
   s->bind(2, std::int64_t{clean ? 1 : 0});
+  s->run();
+  if (sqlite3_changes(db_->handle()) != 1) {
+    throw StorageError(ErrorCode::kInvalidArgument, "no session " + std::to_string(session_id));
+  }
+  scope.commit();
+}
+
+void MapStore::reopenSession(std::int64_t session_id) {
+  WriteScope scope(*this);
+  auto s = db_->cached("UPDATE sessions SET ended_at = NULL, clean_close = 0 WHERE id = ?1");
+  s->bind(1, session_id);
   s->run();
   if (sqlite3_changes(db_->handle()) != 1) {
     throw StorageError(ErrorCode::kInvalidArgument, "no session " + std::to_string(session_id));

@@ -62,6 +62,10 @@ TEST_F(Records, Sessions) {
   EXPECT_EQ(store_->lastSession()->id, second);
   EXPECT_TRUE(store_->settings(second).empty());
   EXPECT_THROW(store_->endSession(999, true), Error);
+  store_->reopenSession(session_);  // resuming the first session
+  EXPECT_FALSE(store_->sessions()[0].ended_at);
+  EXPECT_FALSE(store_->sessions()[0].clean_close);
+  EXPECT_THROW(store_->reopenSession(999), Error);
 }
 
 TEST_F(Records, FramesWithAssignedAndGivenIds) {

@@ -71,6 +71,8 @@ class MapStore {
                             const std::map<std::string, std::string>& settings,
                             const std::string& software_version);
   void endSession(std::int64_t session_id, bool clean);
+  // Marks an ended session as running again (a resumed session): ended_at NULL, not clean.
+  void reopenSession(std::int64_t session_id);
   std::vector<SessionRecord> sessions() const;
   std::optional<SessionRecord> lastSession() const;
   std::map<std::string, std::string> settings(std::int64_t session_id) const;
