@@ -34,7 +34,8 @@ struct Options {
   int wm_max = 0;                      // WM size limit, 0 = unbounded
   double t_time_ms = 0;                // frame-time limit that triggers transfer, 0 = off
   int max_retrieved = 2;               // LTM neighbours brought back per frame
-  int wm_immune_newest = 0;            // newest WM locations never transferred (0 = stm_size)
+  int wm_immune_newest = 0;            // newest WM locations never transferred (at least)
+  double wm_recent_ratio = 0.2;        // ... or this share of WM, whichever is more
 
   // --- Bayes filter and decision (SPEC §6) ---
   double t_loop = 0.11;
@@ -46,7 +47,8 @@ struct Options {
   // Throws placedb::Error(kInvalidArgument) naming the key and the valid values or range;
   // an unknown key is refused with the list of known ones.
   static Options fromSettings(const std::map<std::string, std::string>& settings,
-                              const Options& base = Options());
+                              const Options& base);
+  static Options fromSettings(const std::map<std::string, std::string>& settings);
   std::map<std::string, std::string> toSettings() const;
   void validate() const;
 

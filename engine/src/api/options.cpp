@@ -128,7 +128,9 @@ const std::vector<Row>& table() {
       integer("max_retrieved", &Options::max_retrieved, 0, 1000, "0..1000",
               "LTM neighbours of the best hypothesis brought back per frame"),
       integer("wm_immune_newest", &Options::wm_immune_newest, 0, 100000, "0..100000",
-              "newest WM locations never transferred, 0 = stm_size"),
+              "newest WM locations never transferred (at least)"),
+      real("wm_recent_ratio", &Options::wm_recent_ratio, 0, 1, "0..1",
+           "share of WM, the newest, never transferred (RTAB-Map's Mem/RecentWmRatio)"),
       real("t_loop", &Options::t_loop, 0, 1, "0..1", "loop-closure acceptance threshold"),
       choice("decision_rule", &Options::decision_rule, {"rtabmap", "paper"}, "rtabmap|paper",
              "rtabmap: 1-p(new) >= t_loop and ratio test; paper: p(new) < t_loop"),
@@ -168,6 +170,10 @@ Options Options::fromSettings(const std::map<std::string, std::string>& settings
     if (!row->ok(o)) refuse(key, value, row->valid);
   }
   return o;
+}
+
+Options Options::fromSettings(const std::map<std::string, std::string>& settings) {
+  return fromSettings(settings, Options());
 }
 
 std::map<std::string, std::string> Options::toSettings() const {
