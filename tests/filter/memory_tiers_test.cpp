@@ -99,6 +99,10 @@ TEST(MemoryTiers, TransfersLowestWeightThenOldestAndRespectsImmunity) {
   m.beginFrame();
   EXPECT_EQ(m.transferCandidates(2, {}), (std::vector<MemoryLocationId>{2, 5}));
   EXPECT_THROW(m.transferToLtm({4}), Error);  // already in LTM
+  const MemorySnapshot before = m.snapshot();
+  EXPECT_THROW(m.transferToLtm({5, 5}), Error);  // refused whole: 5 stays in WM
+  EXPECT_THROW(m.retrieveToWm({4, 4}), Error);
+  EXPECT_EQ(m.snapshot(), before);
   EXPECT_EQ(m.checkInvariants(), "");
 }
 

@@ -188,12 +188,14 @@ std::vector<MemoryLocationId> MemoryTiers::transferCandidates(
 }
 
 void MemoryTiers::transferToLtm(const std::vector<MemoryLocationId>& ids) {
+  // Checked in full first, so a refused call changes nothing.
+  std::set<MemoryLocationId> distinct;
   for (MemoryLocationId id : ids) {
     if (tierOf(id) != Tier::kWm) invalid("transfer of " + idText(id) + ", which is not in WM");
+    if (!distinct.insert(id).second) invalid("location " + idText(id) + " transferred twice");
   }
   for (MemoryLocationId id : ids) {
     LocationRecord& r = records_.at(id);
-    if (r.tier != Tier::kWm) invalid("location " + idText(id) + " transferred twice");
     leaveWm(r);
     r.tier = Tier::kLtm;
     ltm_.insert(id);
@@ -222,12 +224,13 @@ std::vector<MemoryLocationId> MemoryTiers::retrievalCandidates(
 }
 
 void MemoryTiers::retrieveToWm(const std::vector<MemoryLocationId>& ids) {
+  std::set<MemoryLocationId> distinct;
   for (MemoryLocationId id : ids) {
     if (tierOf(id) != Tier::kLtm) invalid("retrieval of " + idText(id) + ", which is not in LTM");
+    if (!distinct.insert(id).second) invalid("location " + idText(id) + " retrieved twice");
   }
   for (MemoryLocationId id : ids) {
     LocationRecord& r = records_.at(id);
-    if (r.tier != Tier::kLtm) invalid("location " + idText(id) + " retrieved twice");
     ltm_.erase(id);
     enterWm(r);
     retrieved_this_frame_.insert(id);
