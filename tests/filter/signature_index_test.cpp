@@ -148,6 +148,19 @@ TEST(InvertedIndex, MatchesBruteForceThroughAddsRemovesAndReplaces) {
   }
   expectIndexMatchesBruteForce(index, locations, rng);
 
+  // Setting locations aside one by one frees exactly the words a joint removal would free.
+  FreedWordCounter counter(index);
+  std::vector<LocationId> aside;
+  for (const auto& [id, sig] : locations) {
+    if (id % 4 != 1) continue;
+    aside.push_back(id);
+    counter.setAside(id);
+    EXPECT_EQ(counter.freed(), index.wordsFreedByRemoving(aside).size()) << id;
+  }
+  ASSERT_FALSE(aside.empty());
+  EXPECT_GT(counter.freed(), 0u);
+  EXPECT_EQ(counter.setAside(aside.front()), 0u);  // twice counts nothing
+
   const auto refs = expectedReferences(locations);
   EXPECT_EQ(index.wordCount(), refs.size());
   EXPECT_EQ(referenced.size(), refs.size());

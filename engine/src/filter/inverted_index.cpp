@@ -128,4 +128,18 @@ std::vector<WordId> InvertedIndex::wordsFreedByRemoving(
   return freed;
 }
 
+std::size_t FreedWordCounter::setAside(LocationId location) {
+  const Signature& signature = index_.signatureOf(location);
+  if (!aside_.emplace(location, true).second) return 0;
+  std::size_t newly_freed = 0;
+  for (const auto& e : signature.entries()) {
+    auto it = remaining_.find(e.word);
+    if (it == remaining_.end())
+      it = remaining_.emplace(e.word, index_.referenceCount(e.word)).first;
+    if (--it->second == 0) ++newly_freed;
+  }
+  freed_ += newly_freed;
+  return newly_freed;
+}
+
 }  // namespace placedb

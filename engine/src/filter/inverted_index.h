@@ -62,4 +62,23 @@ class InvertedIndex {
   std::unordered_map<LocationId, Signature> signatures_;
 };
 
+// Counts the words that would leave the index as locations are set aside one at a time, without
+// changing the index: RTAB-Map's time-triggered transfer moves locations (in transfer order)
+// until as many words leave the vocabulary as the frame created. Each step costs the words of the
+// location added.
+class FreedWordCounter {
+ public:
+  explicit FreedWordCounter(const InvertedIndex& index) : index_(index) {}
+  // Sets the location aside (it must be indexed; setting it aside twice counts nothing) and
+  // returns how many words that freed.
+  std::size_t setAside(LocationId location);
+  std::size_t freed() const { return freed_; }
+
+ private:
+  const InvertedIndex& index_;
+  std::unordered_map<WordId, std::size_t> remaining_;  // references left, for words touched
+  std::unordered_map<LocationId, bool> aside_;
+  std::size_t freed_ = 0;
+};
+
 }  // namespace placedb
