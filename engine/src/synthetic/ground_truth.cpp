@@ -26,10 +26,21 @@ std::vector<std::pair<int, int>> computeRevisits(const std::vector<Pose>& poses,
   const int n = static_cast<int>(poses.size());
   std::vector<std::array<cv::Point2d, 4>> footprints(n);
   std::vector<cv::Point2d> centres(n);
+  std::vector<cv::Rect2d> boxes(n);
+  std::vector<double> areas(n);
   double extent = 0;  // the largest distance across any footprint
   for (int i = 0; i < n; ++i) {
     footprints[i] = groundFootprint(poses[i], camera);
     centres[i] = 0.25 * (footprints[i][0] + footprints[i][1] + footprints[i][2] + footprints[i][3]);
+    double min_x = 1e300, min_y = 1e300, max_x = -1e300, max_y = -1e300;
+    for (const cv::Point2d& corner : footprints[i]) {
+      min_x = std::min(min_x, corner.x);
+      min_y = std::min(min_y, corner.y);
+      max_x = std::max(max_x, corner.x);
+      max_y = std::max(max_y, corner.y);
+    }
+    boxes[i] = cv::Rect2d(min_x, min_y, max_x - min_x, max_y - min_y);
+    areas[i] = polygonArea(footprints[i]);
     for (int a = 0; a < 4; ++a) {
       for (int b = a + 1; b < 4; ++b) {
         const cv::Point2d d = footprints[i][a] - footprints[i][b];
@@ -66,6 +77,10 @@ std::vector<std::pair<int, int>> computeRevisits(const std::vector<Pose>& poses,
           if (d.x * d.x + d.y * d.y > reach * reach) continue;
           if (headingDifference(poses[q].heading, poses[r].heading) > settings.max_heading)
             continue;
+          // The shared area is at most the boxes' shared area and the union at least the larger
+          // footprint: a cheap, sound rejection before the exact polygon clipping.
+          const double box_shared = (boxes[q] & boxes[r]).area();
+          if (box_shared < settings.min_overlap * std::max(areas[q], areas[r])) continue;
           if (footprintOverlap(footprints[q], footprints[r]) >= settings.min_overlap) {
             pairs.emplace_back(q, r);
           }

@@ -1,6 +1,7 @@
 #include "synthetic/tile_painter.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -255,43 +256,66 @@ void paintShape(cv::Mat& tile, const Shape& s, cv::Point2d local) {
   }
 }
 
-// Catmull-Rom weights mapping lattice values to texels along one axis of the tile.
-cv::Mat interpolationWeights(std::int64_t first_texel, int texels, double cell,
-                             std::int64_t& first_node) {
-  first_node = static_cast<std::int64_t>(std::floor(first_texel / cell)) - 1;
+// Catmull-Rom taps mapping lattice values to texels along one axis of the tile: texel k blends
+// lattice entries first[k] .. first[k] + 3 (relative to first_node) with weights[k].
+struct AxisTaps {
+  std::int64_t first_node = 0;
+  int nodes = 0;
+  std::vector<int> first;
+  std::vector<std::array<float, 4>> weights;
+};
+
+AxisTaps axisTaps(std::int64_t first_texel, int texels, double cell) {
+  AxisTaps taps;
+  taps.first_node = static_cast<std::int64_t>(std::floor(first_texel / cell)) - 1;
   const auto last_node =
       static_cast<std::int64_t>(std::floor((first_texel + texels - 1) / cell)) + 2;
-  cv::Mat weights = cv::Mat::zeros(texels, static_cast<int>(last_node - first_node + 1), CV_32F);
+  taps.nodes = static_cast<int>(last_node - taps.first_node + 1);
   for (int k = 0; k < texels; ++k) {
     const double u = (first_texel + k) / cell;
     const double node = std::floor(u);
     const double t = u - node;
     const double t2 = t * t, t3 = t2 * t;
-    const double w[4] = {0.5 * (-t3 + 2 * t2 - t), 0.5 * (3 * t3 - 5 * t2 + 2),
-                         0.5 * (-3 * t3 + 4 * t2 + t), 0.5 * (t3 - t2)};
-    const int column = static_cast<int>(static_cast<std::int64_t>(node) - 1 - first_node);
-    for (int j = 0; j < 4; ++j) weights.at<float>(k, column + j) = static_cast<float>(w[j]);
+    taps.first.push_back(static_cast<int>(static_cast<std::int64_t>(node) - 1 - taps.first_node));
+    taps.weights.push_back({static_cast<float>(0.5 * (-t3 + 2 * t2 - t)),
+                            static_cast<float>(0.5 * (3 * t3 - 5 * t2 + 2)),
+                            static_cast<float>(0.5 * (-3 * t3 + 4 * t2 + t)),
+                            static_cast<float>(0.5 * (t3 - t2))});
   }
-  return weights;
+  return taps;
 }
 
 // Adds one octave of value noise, continuous across tiles because the lattice is global.
+// Separable: lattice rows are first interpolated along x, then those rows along y.
 void addValueNoise(cv::Mat& tile32, std::uint64_t seed, std::uint64_t salt, std::int64_t x0,
                    std::int64_t y0, double cell, double amplitude) {
-  std::int64_t node_x = 0, node_y = 0;
-  const cv::Mat wx = interpolationWeights(x0, tile32.cols, cell, node_x);
-  const cv::Mat wy = interpolationWeights(y0, tile32.rows, cell, node_y);
-  cv::Mat lattice(wy.cols, wx.cols, CV_32F);
-  for (int r = 0; r < lattice.rows; ++r) {
-    for (int c = 0; c < lattice.cols; ++c) {
-      const double v = 2.0 * unitOf(hashOf(seed, salt, node_x + c, node_y + r)) - 1.0;
-      lattice.at<float>(r, c) = static_cast<float>(amplitude * v);
+  const AxisTaps along_x = axisTaps(x0, tile32.cols, cell);
+  const AxisTaps along_y = axisTaps(y0, tile32.rows, cell);
+  cv::Mat rows(along_y.nodes, tile32.cols, CV_32F);
+  std::vector<float> lattice_row(along_x.nodes);
+  for (int r = 0; r < along_y.nodes; ++r) {
+    for (int c = 0; c < along_x.nodes; ++c) {
+      const double v =
+          2.0 * unitOf(hashOf(seed, salt, along_x.first_node + c, along_y.first_node + r)) - 1.0;
+      lattice_row[c] = static_cast<float>(amplitude * v);
+    }
+    auto* out = rows.ptr<float>(r);
+    for (int k = 0; k < tile32.cols; ++k) {
+      const float* in = &lattice_row[along_x.first[k]];
+      const auto& w = along_x.weights[k];
+      out[k] = w[0] * in[0] + w[1] * in[1] + w[2] * in[2] + w[3] * in[3];
     }
   }
-  cv::Mat rows_done = wy * lattice;
-  cv::Mat octave;
-  cv::gemm(rows_done, wx, 1.0, cv::noArray(), 0.0, octave, cv::GEMM_2_T);
-  tile32 += octave;
+  for (int k = 0; k < tile32.rows; ++k) {
+    const auto& w = along_y.weights[k];
+    const int first = along_y.first[k];
+    const float* in[4] = {rows.ptr<float>(first), rows.ptr<float>(first + 1),
+                          rows.ptr<float>(first + 2), rows.ptr<float>(first + 3)};
+    auto* out = tile32.ptr<float>(k);
+    for (int col = 0; col < tile32.cols; ++col) {
+      out[col] += w[0] * in[0][col] + w[1] * in[1][col] + w[2] * in[2][col] + w[3] * in[3][col];
+    }
+  }
 }
 
 }  // namespace
