@@ -12,7 +12,8 @@
 //   trigger assumes frame time grows with |WM| and asks for ceil(|WM| x (t - T_time) / t), at
 //   least 1, at most max_transfers_per_frame (0 = no cap); the larger request wins. A caller that
 //   prefers RTAB-Map's word balance (transfer until as many words left the vocabulary as this
-//   frame created) walks transferCandidates() in order and stops on its own.
+//   frame created) walks transferCandidates() in order, counting with a FreedWordCounter
+//   (filter/inverted_index.h), and stops on its own.
 #include <cstdint>
 #include <deque>
 #include <map>
