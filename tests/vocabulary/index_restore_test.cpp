@@ -279,6 +279,8 @@ TEST(IndexStateBytes, RoundTripAndRefusal) {
   ClusteredSource source(4);
   v.quantize(source.next(200), 0);
   const IndexState state = v.state();
+  EXPECT_EQ(state.splits, v.splitLog());
+  EXPECT_EQ(state.next_word_id, v.nextWordId());
   std::vector<std::uint8_t> bytes = state.serialize();
   EXPECT_TRUE(IndexState::deserialize(bytes) == state);
   EXPECT_EQ(IndexState::deserialize(bytes).serialize(), bytes);

@@ -255,6 +255,10 @@ TEST(Options, ValidateRejectsOutOfRangeSettings) {
   EXPECT_THROW(Vocabulary(VocabularyOptions{}, 0, "x"), Error);
   Vocabulary v(VocabularyOptions{}, kDim, "x");
   EXPECT_THROW(v.quantize(cv::Mat(2, kDim + 1, CV_32F, cv::Scalar(0)), 0), Error);
+  cv::Mat nan_row = rows({{0, 0, 0, 0}, {1, 0, 0, 0}});
+  nan_row.at<float>(1, 2) = std::nanf("");
+  EXPECT_THROW(v.quantize(nan_row, 0), Error);
+  EXPECT_EQ(v.size(), 0u);
 }
 
 }  // namespace

@@ -69,6 +69,8 @@ void Vocabulary::checkDescriptors(const cv::Mat& descriptors, const char* what) 
   require(descriptors.cols == dim_, std::string(what) + ": descriptors have " +
                                         std::to_string(descriptors.cols) +
                                         " columns, the vocabulary " + std::to_string(dim_));
+  require(cv::checkRange(descriptors, true),
+          std::string(what) + ": descriptors must be finite (no NaN or infinity)");
 }
 
 float Vocabulary::inUnit(float dist2) const {

@@ -115,7 +115,10 @@ class Vocabulary {
   // The k nearest words (approximate, `checks` of the options), plain Euclidean distances.
   std::vector<std::pair<std::int64_t, float>> knn(const float* query, int k) const;
 
-  IndexState state() const;
+  IndexState state() const;  // copies the whole split log: for tests and rare full saves
+  // The engine's cheap path: persist nextWordId() and the log records beyond the ones it already
+  // stored (the log only grows); state() == {settings, nextWordId(), splitLog()}.
+  const std::vector<SplitRecord>& splitLog() const { return forest_->splits(); }
   // Grows whenever state() changes (both parts only grow: the split log and the next word id);
   // persist the state when it moved. A restored vocabulary reports the same version.
   std::uint64_t stateVersion() const {
