@@ -11,6 +11,7 @@ packages=(
   libboost-serialization-dev
   libgtest-dev libgmock-dev
   nlohmann-json3-dev libcli11-dev libfmt-dev
+  libplplot-dev plplot-driver-cairo
   python3
 )
 if [[ "${1:-}" == "--fuzz" ]]; then

@@ -1,0 +1,266 @@
+// `placedb map | query | info | eval | demo` end to end, on the small real sequence
+// (rtabmap_samples, skipped when absent) and on a synthetic sequence made here.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <thread>
+
+#include "cli_test_support.h"
+#include "synthetic/synthetic_sequence.h"
+
+namespace placedb::testing {
+namespace {
+
+namespace fs = std::filesystem;
+using cli::CsvTable;
+using cli::readCsv;
+
+// 60 synthetic frames, written once per test process.
+fs::path demoSequence() {
+  static fs::path dir;
+  if (dir.empty()) {
+    dir = scratchDir("demo_sequence_60");
+    synthetic::SyntheticOptions options;
+    options.frames = 60;
+    synthetic::writeSequence(synthetic::SyntheticSequence(options), dir);
+  }
+  return dir;
+}
+
+std::vector<std::int64_t> frameColumn(const CsvTable& log) {
+  std::vector<std::int64_t> frames;
+  int column = log.column("frame");
+  for (std::size_t i = 0; i < log.rows.size(); ++i)
+    frames.push_back(std::stoll(log.cell(i, column)));
+  return frames;
+}
+
+std::vector<std::int64_t> range(std::int64_t first, std::int64_t last) {
+  std::vector<std::int64_t> values;
+  for (std::int64_t i = first; i <= last; ++i) values.push_back(i);
+  return values;
+}
+
+nlohmann::json info(const fs::path& map, const fs::path& scratch) {
+  auto r = placedb({"info", map.string(), "--json"}, scratch);
+  EXPECT_EQ(r.exit_code, 0) << describe(r);
+  return nlohmann::json::parse(r.out);
+}
+
+// The scored columns of two logs must agree row by row.
+void expectSameScoredRows(const CsvTable& a, const CsvTable& b) {
+  ASSERT_EQ(a.rows.size(), b.rows.size());
+  for (const char* name : {"frame", "candidate_frames", "score", "accepted"}) {
+    int ca = a.column(name), cb = b.column(name);
+    ASSERT_GE(ca, 0);
+    ASSERT_GE(cb, 0);
+    for (std::size_t i = 0; i < a.rows.size(); ++i)
+      EXPECT_EQ(a.cell(i, ca), b.cell(i, cb)) << name << " differs at row " << i;
+  }
+}
+
+TEST(CliRealSequence, MapEvalInfoQueryOnRtabmapSamples) {
+  fs::path data = dataset("rtabmap_samples");
+  if (data.empty()) GTEST_SKIP() << "rtabmap_samples absent under " << datasetsDir();
+  auto dir = scratchDir("CliReal_rtabmap");
+  auto map = dir / "run.placedb", log = dir / "run.csv";
+
+  auto mapped =
+      placedb({"map", map.string(), (data / "frames.txt").string(), "--log", log.string()}, dir);
+  ASSERT_EQ(mapped.exit_code, 0) << describe(mapped);
+  EXPECT_NE(mapped.err.find("frames/s"), std::string::npos) << "no progress line: " << mapped.err;
+  CsvTable table = readCsv(log);
+  EXPECT_EQ(frameColumn(table), range(0, 83));
+  EXPECT_EQ(table.header.front(), "frame");
+
+  // Our scores equal the reference scorer's, figure for figure, for both windows.
+  for (const char* window : {"0", "10"}) {
+    auto ours =
+        placedb({"eval", log.string(), (data / "gt_pairs.txt").string(), "--window", window}, dir);
+    ASSERT_EQ(ours.exit_code, 0) << describe(ours);
+    auto reference =
+        run({"/usr/bin/python3", (datasetsDir() / ".." / "tools" / "score_loops.py").string(),
+             log.string(), (data / "gt_pairs.txt").string(), "--window", window},
+            dir);
+    ASSERT_EQ(reference.exit_code, 0) << reference.err;
+    EXPECT_EQ(ours.out, reference.out);
+  }
+  auto plotted = placedb({"eval", log.string(), (data / "gt_pairs.txt").string(), "--plots",
+                          (dir / "plots").string(), "--map", map.string()},
+                         dir);
+  ASSERT_EQ(plotted.exit_code, 0) << describe(plotted);
+  for (const char* png : {"precision_recall.png", "score.png", "vocabulary.png",
+                          "quantisation_error.png", "wm_size.png", "time.png"}) {
+    cv::Mat image = cv::imread((dir / "plots" / png).string());
+    EXPECT_FALSE(image.empty()) << png;
+  }
+
+  nlohmann::json about = info(map, dir);
+  ASSERT_EQ(about["sessions"].size(), 1u);
+  EXPECT_EQ(about["sessions"][0]["frames"], 84);
+  EXPECT_EQ(about["sessions"][0]["clean_close"], true);
+  EXPECT_EQ(about["frames"], 84);
+  EXPECT_GT(about["words"].get<std::int64_t>(), 0);
+  EXPECT_GT(about["locations"].get<std::int64_t>(), 0);
+  auto text = placedb({"info", map.string()}, dir);
+  EXPECT_EQ(text.exit_code, 0);
+  EXPECT_NE(text.out.find("session 1: 84 frames"), std::string::npos) << text.out;
+
+  // A mapped image finds its own place; the map file is not changed by a query.
+  auto before = fs::last_write_time(map);
+  auto size_before = fs::file_size(map);
+  std::vector<std::string> list;
+  {
+    std::ifstream frames(data / "frames.txt");
+    for (std::string line; std::getline(frames, line);)
+      if (!line.empty() && line[0] != '#') list.push_back((data / line).string());
+  }
+  ASSERT_GT(list.size(), 20u);
+  auto query = placedb({"query", map.string(), list[20], "--json", "--top", "3"}, dir);
+  ASSERT_EQ(query.exit_code, 0) << describe(query);
+  auto answers = nlohmann::json::parse(query.out);
+  ASSERT_EQ(answers.size(), 1u);
+  ASSERT_FALSE(answers[0]["matches"].empty());
+  EXPECT_LE(answers[0]["matches"].size(), 3u);
+  bool found_itself = false;
+  for (const auto& match : answers[0]["matches"])
+    for (const auto& frame : match["frames"])
+      if (std::llabs(frame["source_index"].get<std::int64_t>() - 20) <= 2) found_itself = true;
+  EXPECT_TRUE(found_itself) << query.out;
+  EXPECT_EQ(fs::file_size(map), size_before);
+  EXPECT_EQ(fs::last_write_time(map), before);
+  auto query_text = placedb({"query", map.string(), list[20]}, dir);
+  EXPECT_NE(query_text.out.find("similarity"), std::string::npos) << query_text.out;
+}
+
+TEST(CliSyntheticSequence, SplitRunEqualsStraightRun) {
+  auto seq = demoSequence();
+  auto dir = scratchDir("CliSynthetic_split");
+  auto source = (seq / "frames.txt").string();
+  auto straight = placedb(
+      {"map", (dir / "a.placedb").string(), source, "--log", (dir / "a.csv").string()}, dir);
+  ASSERT_EQ(straight.exit_code, 0) << describe(straight);
+
+  auto b = (dir / "b.placedb").string(), b_log = (dir / "b.csv").string();
+  auto first = placedb({"map", b, source, "--log", b_log, "--stop-after", "30"}, dir);
+  ASSERT_EQ(first.exit_code, 0) << describe(first);
+  EXPECT_EQ(frameColumn(readCsv(b_log)), range(0, 29));
+  nlohmann::json halfway = info(b, dir);
+  ASSERT_EQ(halfway["sessions"].size(), 1u);
+  EXPECT_EQ(halfway["sessions"][0]["clean_close"], true);
+  EXPECT_EQ(halfway["sessions"][0]["last_source_index"], 29);
+
+  auto second = placedb({"map", b, source, "--log", b_log}, dir);
+  ASSERT_EQ(second.exit_code, 0) << describe(second);
+  EXPECT_NE(second.err.find("resuming session 1"), std::string::npos) << second.err;
+  CsvTable split = readCsv(b_log);  // one header only: a second one would be a row here
+  EXPECT_EQ(frameColumn(split), range(0, 59));
+  expectSameScoredRows(readCsv(dir / "a.csv"), split);
+
+  nlohmann::json done = info(b, dir);
+  ASSERT_EQ(done["sessions"].size(), 1u);
+  EXPECT_EQ(done["sessions"][0]["frames"], 60);
+
+  // The source is finished: mapping it again starts session 2, with frames counted from 0.
+  auto third =
+      placedb({"map", b, source, "--log", (dir / "b2.csv").string(), "--stop-after", "5"}, dir);
+  ASSERT_EQ(third.exit_code, 0) << describe(third);
+  EXPECT_EQ(frameColumn(readCsv(dir / "b2.csv")), range(0, 4));
+  EXPECT_EQ(info(b, dir)["sessions"].size(), 2u);
+}
+
+TEST(CliSyntheticSequence, SettingsAreStoredAndKeptOnResume) {
+  auto seq = demoSequence();
+  auto dir = scratchDir("CliSynthetic_settings");
+  auto map = (dir / "m.placedb").string();
+  std::ofstream(dir / "run.conf") << "t_loop = 0.3\nstm_size = 8\n";
+  auto r = placedb({"map", map, (seq / "images").string(), "--stop-after", "10", "--config",
+                    (dir / "run.conf").string(), "--set", "t_loop=0.25", "--quiet"},
+                   dir);
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_TRUE(r.err.empty()) << "--quiet printed: " << r.err;
+  auto settings = info(fs::path(map), dir)["sessions"][0]["settings"];
+  EXPECT_EQ(settings["t_loop"], "0.25");
+  EXPECT_EQ(settings["stm_size"], "8");
+  // Resuming with other settings warns and keeps the stored ones.
+  auto resumed = placedb(
+      {"map", map, (seq / "images").string(), "--stop-after", "5", "--set", "t_loop=0.5"}, dir);
+  ASSERT_EQ(resumed.exit_code, 0) << describe(resumed);
+  EXPECT_NE(resumed.err.find("placedb: warning: resuming session 1"), std::string::npos)
+      << resumed.err;
+  auto after = info(fs::path(map), dir);
+  ASSERT_EQ(after["sessions"].size(), 1u);
+  EXPECT_EQ(after["sessions"][0]["settings"]["t_loop"], "0.25");
+  EXPECT_EQ(after["sessions"][0]["frames"], 15);
+}
+
+TEST(CliSyntheticSequence, UnreadableImagesGetARowAndAWarning) {
+  auto seq = demoSequence();
+  auto dir = scratchDir("CliSynthetic_unreadable");
+  fs::create_directories(dir / "frames");
+  std::vector<std::string> images;
+  for (const auto& entry : fs::directory_iterator(seq / "images")) images.push_back(entry.path());
+  std::sort(images.begin(), images.end());
+  for (int i = 0; i < 8; ++i)
+    fs::copy_file(images[static_cast<std::size_t>(i)],
+                  dir / "frames" / (std::to_string(i) + ".png"));
+  std::ofstream(dir / "frames" / "8.png");  // zero bytes
+  std::ofstream(dir / "frames" / "9.jpg") << "random bytes, not a JPEG";
+  std::ofstream(dir / "frames" / "readme.txt") << "not an image";
+  auto log = dir / "run.csv";
+  auto r = placedb(
+      {"map", (dir / "m.placedb").string(), (dir / "frames").string(), "--log", log.string()}, dir);
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_NE(r.err.find("placedb: warning: frame 8"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("placedb: warning: frame 9"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("readme.txt"), std::string::npos) << r.err;
+  CsvTable table = readCsv(log);
+  EXPECT_EQ(frameColumn(table), range(0, 9));
+  int outcome = table.column("outcome");
+  EXPECT_EQ(table.cell(8, outcome), "bad");
+  EXPECT_EQ(table.cell(9, outcome), "bad");
+}
+
+TEST(CliSyntheticSequence, InterruptClosesCleanlyAndResumes) {
+  auto seq = demoSequence();
+  auto dir = scratchDir("CliSynthetic_interrupt");
+  auto map = (dir / "m.placedb").string(), log = (dir / "run.csv").string();
+  std::vector<std::string> argv = {
+      PLACEDB_CLI_BINARY, "map", map, (seq / "frames.txt").string(), "--log", log};
+  Process mapping(argv, dir);
+  // Wait for a few rows, then Ctrl-C.
+  for (int i = 0; i < 400; ++i) {
+    if (fs::exists(log) && readCsv(log).rows.size() >= 3) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  mapping.signal(SIGINT);
+  auto stopped = mapping.wait();
+  ASSERT_EQ(stopped.exit_code, 0) << describe(stopped);
+  auto about = info(fs::path(map), dir);
+  EXPECT_EQ(about["sessions"][0]["clean_close"], true);
+  auto rest = placedb({"map", map, (seq / "frames.txt").string(), "--log", log}, dir);
+  ASSERT_EQ(rest.exit_code, 0) << describe(rest);
+  EXPECT_EQ(frameColumn(readCsv(log)), range(0, 59));
+  EXPECT_EQ(info(fs::path(map), dir)["sessions"].size(), 1u);
+}
+
+TEST(CliDemo, MapsScoresAndPlotsWithoutOutsideData) {
+  auto dir = scratchDir("CliDemo");
+  auto r = placedb({"demo", "--out", (dir / "out").string(), "--frames", "60"}, dir);
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_NE(r.out.find("recall_at_100_precision"), std::string::npos) << r.out;
+  EXPECT_TRUE(fs::exists(dir / "out" / "demo.placedb"));
+  EXPECT_EQ(frameColumn(readCsv(dir / "out" / "run.csv")), range(0, 59));
+  for (const char* png : {"score.png", "vocabulary.png", "wm_size.png", "time.png"})
+    EXPECT_FALSE(cv::imread((dir / "out" / "plots" / png).string()).empty()) << png;
+  // Running it again starts afresh rather than resuming the finished demo map.
+  auto again = placedb({"demo", "--out", (dir / "out").string(), "--frames", "60"}, dir);
+  ASSERT_EQ(again.exit_code, 0) << describe(again);
+  EXPECT_EQ(frameColumn(readCsv(dir / "out" / "run.csv")), range(0, 59));
+}
+
+}  // namespace
+}  // namespace placedb::testing

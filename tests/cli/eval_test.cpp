@@ -1,0 +1,152 @@
+// `placedb eval` must print exactly what the reference scorer score_loops.py prints.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+
+#include "eval.h"
+#include "frame_log.h"
+#include "subprocess.h"
+#include "test_paths.h"
+
+namespace placedb::cli {
+namespace {
+
+namespace fs = std::filesystem;
+using placedb::testing::datasetsDir;
+using placedb::testing::scratchDir;
+
+fs::path referenceScorer() { return datasetsDir() / ".." / "tools" / "score_loops.py"; }
+
+struct Case {
+  std::string name, log, gt;
+  int window = 0;
+};
+
+// Runs both scorers on the same files; every printed figure must agree byte for byte.
+void expectSameAsReference(const Case& c) {
+  auto dir = scratchDir("Eval_" + c.name);
+  std::ofstream(dir / "log.csv") << c.log;
+  std::ofstream(dir / "gt.txt") << c.gt;
+  for (bool json : {false, true}) {
+    std::vector<std::string> argv = {"/usr/bin/python3",
+                                     referenceScorer().string(),
+                                     (dir / "log.csv").string(),
+                                     (dir / "gt.txt").string(),
+                                     "--window",
+                                     std::to_string(c.window)};
+    if (json) argv.push_back("--json");
+    auto reference = placedb::testing::run(argv, dir);
+    ASSERT_EQ(reference.exit_code, 0) << c.name << ": " << reference.err;
+    Evaluation eval = evaluate(readCsv(dir / "log.csv"), loadGroundTruth(dir / "gt.txt"), c.window);
+    std::string ours = json ? figuresJson(eval.figures) : figuresText(eval.figures);
+    EXPECT_EQ(ours, reference.out) << c.name << (json ? " (json)" : " (text)");
+  }
+}
+
+class EvalAgainstReference : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!fs::exists(referenceScorer()))
+      GTEST_SKIP() << "reference scorer absent: " << referenceScorer();
+  }
+};
+
+const char* kHeader = "frame,candidate_frames,score,accepted,time_ms\n";
+
+TEST_F(EvalAgainstReference, WrongHypothesesSetTheBar) {
+  expectSameAsReference(
+      {"bar",
+       std::string(kHeader) +
+           "0,,0,0,10.5\n1,,0,0,11\n2,0,0.2,0,9.25\n3,1,0.9,1,12\n4,0 1,0.5,1,8\n5,2,0.6,0,30\n"
+           "6,3,0.45,1,7.125\n7,5,0.9,0,13\n",
+       "# q r\n3 1\n4 0\n5 4\n6 3\n7 5\n7 6\n"});
+}
+
+TEST_F(EvalAgainstReference, NoWrongHypothesis) {
+  expectSameAsReference({"no_wrong",
+                         std::string(kHeader) + "0,,0,0,1\n1,0,0.3,1,2\n2,1,0.1,0,3\n3,,,0,4\n",
+                         "1 0\n2 1\n3 0\n"});
+}
+
+TEST_F(EvalAgainstReference, EmptyCandidatesAndSemicolons) {
+  expectSameAsReference({"semicolons",
+                         std::string(kHeader) +
+                             "0,,0,0,5\n1,,0.7,1,5\n2,0;1,0.4,1,6\n3,\"0 ; 2\",0.8,true,6\n"
+                             "4,9;8,0.95,0,7\n5,3,0.5,True,\n",
+                         "2 1\n3 2 # trailing comment\n5 3\n\n"});
+}
+
+TEST_F(EvalAgainstReference, NoAcceptedNoTimesNoLoops) {
+  expectSameAsReference({"nothing", "frame,candidate_frames,score,accepted\n0,,0,0\n1,0,0.5,0\n",
+                         "# no loops at all\n"});
+}
+
+TEST_F(EvalAgainstReference, WindowAndPercentileTies) {
+  // Six times: p50 index round(2.5) = 2 (half to even), p99 round(4.95) = 5.
+  expectSameAsReference(
+      {"window",
+       std::string(kHeader) +
+           "0,,0,0,6\n1,,0,0,1\n2,,0,0,5\n3,0,0.2,1,2\n4,10,0.3,1,4\n5,30,0.9,0,3\n",
+       "3 5\n4 1\n5 12\n", 3});
+}
+
+TEST_F(EvalAgainstReference, RandomLogs) {
+  std::mt19937 random(2024);
+  for (int trial = 0; trial < 12; ++trial) {
+    int frames = 20 + static_cast<int>(random() % 80);
+    std::string log = kHeader, gt;
+    for (int q = 0; q < frames; ++q) {
+      std::string cands;
+      int count = q > 0 ? static_cast<int>(random() % 4) : 0;
+      for (int k = 0; k < count; ++k)
+        cands += (k ? (random() % 2 ? " " : ";") : "") + std::to_string(random() % q);
+      double score = std::round(std::uniform_real_distribution<double>(0, 1)(random) * 1000) / 1000;
+      double time = std::uniform_real_distribution<double>(1, 100)(random);
+      log += std::to_string(q) + "," + cands + "," + std::to_string(score) + "," +
+             (random() % 3 == 0 ? "1" : "0") + "," + std::to_string(time) + "\n";
+      if (q > 5 && random() % 2)
+        gt += std::to_string(q) + " " + std::to_string(random() % q) + "\n";
+    }
+    expectSameAsReference(
+        {"random" + std::to_string(trial), log, gt, static_cast<int>(random() % 3) * 2});
+  }
+}
+
+TEST(PythonCompatibility, RoundingAndRepr) {
+  EXPECT_EQ(pythonRepr(100.0), "100.0");
+  EXPECT_EQ(pythonRepr(66.67), "66.67");
+  EXPECT_EQ(pythonRepr(1e16), "1e+16");
+  EXPECT_EQ(pythonRepr(1e-05), "1e-05");
+  EXPECT_EQ(pythonRepr(std::nan("")), "nan");
+  EXPECT_EQ(pythonRound2(0.125), 0.12);  // exact tie: half to even
+  EXPECT_EQ(pythonRound2(2.675), 2.67);  // 2.675 is 2.67499999... in binary
+  EXPECT_EQ(pythonRound2(200.0 / 3.0), 66.67);
+  EXPECT_EQ(pythonPercentile({4, 1, 3, 2}, 50), 3);        // index round(1.5) = 2
+  EXPECT_EQ(pythonPercentile({1, 2, 3, 4, 5, 6}, 50), 3);  // index round(2.5) = 2
+}
+
+TEST(PrecisionRecall, CurveOverThresholds) {
+  CsvTable log;
+  log.header = {"frame", "candidate_frames", "score", "accepted"};
+  log.rows = {{"0", "", "0", "0"},
+              {"1", "0", "0.9", "1"},
+              {"2", "0", "0.8", "1"},
+              {"3", "1", "0.5", "0"},
+              {"4", "2", "0.5", "0"}};
+  GroundTruth gt = {{1, {0}}, {3, {1}}, {4, {9}}};
+  Evaluation eval = evaluate(log, gt, 0);
+  ASSERT_EQ(eval.pr_curve.size(), 3u);
+  EXPECT_DOUBLE_EQ(eval.pr_curve[0].threshold, 0.9);
+  EXPECT_DOUBLE_EQ(eval.pr_curve[0].precision, 1.0);
+  EXPECT_DOUBLE_EQ(eval.pr_curve[0].recall, 1.0 / 3);
+  EXPECT_DOUBLE_EQ(eval.pr_curve[1].precision, 0.5);  // frame 2 has no loop: wrong
+  // The tie at 0.5 is declared together: frames 3 (right) and 4 (wrong).
+  EXPECT_DOUBLE_EQ(eval.pr_curve[2].precision, 0.5);
+  EXPECT_DOUBLE_EQ(eval.pr_curve[2].recall, 2.0 / 3);
+  EXPECT_DOUBLE_EQ(eval.figures.wrong_bar, 0.8);
+}
+
+}  // namespace
+}  // namespace placedb::cli

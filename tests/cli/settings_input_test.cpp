@@ -1,0 +1,74 @@
+// Settings from --preset, --config and --set, with their precedence and refusals.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "placedb/error.h"
+#include "settings_input.h"
+#include "test_paths.h"
+
+namespace placedb::cli {
+namespace {
+
+using placedb::testing::scratchDir;
+
+TEST(SettingsInput, PrecedencePresetThenConfigThenSet) {
+  auto dir = scratchDir("SettingsInput_precedence");
+  std::ofstream(dir / "a.conf") << "# comment\n t_loop = 0.3  # trailing\n\nstm_size=12\n";
+  SettingsInput input;
+  input.preset = "paper";
+  input.config_file = (dir / "a.conf").string();
+  input.assignments = {"stm_size=7"};
+  Options options = resolveOptions(input);
+  EXPECT_DOUBLE_EQ(options.t_loop, 0.3);  // config over preset
+  EXPECT_EQ(options.stm_size, 7);         // --set over config
+  // A preset value nobody overrode survives.
+  EXPECT_EQ(options.decision_rule, Options::paperPreset().decision_rule);
+}
+
+TEST(SettingsInput, JsonConfig) {
+  auto dir = scratchDir("SettingsInput_json");
+  std::ofstream(dir / "a.json") << "{\"t_loop\": 0.25, \"word_rule\": \"nndr\", \"upright\": true}";
+  Settings settings = readConfigFile(dir / "a.json");
+  EXPECT_EQ(settings.at("t_loop"), "0.25");
+  EXPECT_EQ(settings.at("word_rule"), "nndr");
+  EXPECT_EQ(settings.at("upright"), "true");
+  SettingsInput input;
+  input.config_file = (dir / "a.json").string();
+  EXPECT_TRUE(resolveOptions(input).upright);
+}
+
+TEST(SettingsInput, RefusesUnknownKeysBadValuesAndMalformedInput) {
+  auto code = [](const SettingsInput& input) {
+    try {
+      resolveOptions(input);
+    } catch (const Error& e) {
+      return e.code();
+    }
+    return ErrorCode::kInternal;
+  };
+  SettingsInput unknown;
+  unknown.assignments = {"no_such_key=1"};
+  EXPECT_EQ(code(unknown), ErrorCode::kInvalidArgument);
+  try {
+    resolveOptions(unknown);
+  } catch (const Error& e) {
+    // The refusal lists the valid keys.
+    EXPECT_NE(std::string(e.what()).find("t_loop"), std::string::npos) << e.what();
+  }
+  SettingsInput bad_value;
+  bad_value.assignments = {"t_loop=abc"};
+  EXPECT_EQ(code(bad_value), ErrorCode::kInvalidArgument);
+  SettingsInput no_equals;
+  no_equals.assignments = {"t_loop"};
+  EXPECT_EQ(code(no_equals), ErrorCode::kInvalidArgument);
+  SettingsInput bad_preset;
+  bad_preset.preset = "fastest";
+  EXPECT_EQ(code(bad_preset), ErrorCode::kInvalidArgument);
+  SettingsInput missing_config;
+  missing_config.config_file = "/nonexistent/placedb.conf";
+  EXPECT_EQ(code(missing_config), ErrorCode::kIo);
+}
+
+}  // namespace
+}  // namespace placedb::cli

@@ -1,0 +1,32 @@
+# The `placedb` command line. Everything but main() lives in placedb_cli so tests/cli can test the
+# parts (eval, sources, settings, log) directly; the executable lands in ${CMAKE_BINARY_DIR}/tools.
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(PLPLOT REQUIRED IMPORTED_TARGET plplot)
+
+add_library(placedb_cli STATIC
+  ${CMAKE_CURRENT_LIST_DIR}/src/exit_codes.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/interrupt.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/image_source.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/settings_input.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/frame_log.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/progress.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/eval.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/plots.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/run_series.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/mapping_run.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_map.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_query.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_info.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_vocab.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_eval.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_demo.cpp)
+target_include_directories(placedb_cli PUBLIC ${CMAKE_CURRENT_LIST_DIR}/src)
+# The demo and vocab commands use engine internals (synthetic sequences, the vocabulary file).
+target_link_libraries(placedb_cli
+  PUBLIC placedb_engine placedb_storage CLI11::CLI11 fmt::fmt nlohmann_json::nlohmann_json
+         ${OpenCV_LIBS}
+  PRIVATE placedb_engine_internal PkgConfig::PLPLOT placedb_build_flags placedb_version)
+
+add_executable(placedb ${CMAKE_CURRENT_LIST_DIR}/src/main.cpp)
+target_link_libraries(placedb PRIVATE placedb_cli placedb_build_flags placedb_version)
+set_target_properties(placedb PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/tools)

@@ -1,0 +1,67 @@
+#include <fmt/format.h>
+
+#include <cstdio>
+
+#include "cmd_eval.h"
+#include "commands.h"
+#include "frame_log.h"
+#include "run_series.h"
+
+namespace placedb::cli {
+
+EvalOutcome runEvaluation(const EvalRequest& request) {
+  GroundTruth gt = loadGroundTruth(request.gt);
+  CsvTable log = readCsv(request.log);
+  EvalOutcome outcome;
+  outcome.evaluation = evaluate(log, gt, request.window);
+  if (!request.plots_dir.empty()) {
+    RunSeries series =
+        buildRunSeries(log, outcome.evaluation, gt, request.map_path, request.session);
+    outcome.plots = writePlots(series, outcome.evaluation.pr_curve, request.plots_dir);
+  }
+  return outcome;
+}
+
+Command addEvalCommand(CLI::App& parent) {
+  auto request = std::make_shared<EvalRequest>();
+  auto json = std::make_shared<bool>(false);
+  auto session = std::make_shared<std::int64_t>(0);
+  CLI::App* app = parent.add_subcommand("eval", "Score a per-frame log against ground truth");
+  app->footer(
+      "Score a per-frame log (written by `placedb map --log`) against ground-truth pairs, with\n"
+      "the definitions of the reference scorer score_loops.py: recall at 100% precision (R@100P),\n"
+      "precision and recall of the accepted closures, time per frame. Without --json the output\n"
+      "is line for line what score_loops.py prints.\n\n"
+      "GT holds lines `q r` (0-based, q > r: frame q revisits frame r); '#' starts a comment.\n"
+      "A hypothesis is right when one of its candidate frames is within W frames of a\n"
+      "ground-truth reference.\n\n"
+      "Examples:\n"
+      "  placedb eval run.csv gt_pairs.txt\n"
+      "  placedb eval run.csv gt_pairs.txt --window 10 --json\n"
+      "  placedb eval run.csv gt_pairs.txt --plots figures/ --map run.placedb");
+  app->add_option("LOG", request->log, "per-frame CSV log")->required();
+  app->add_option("GT", request->gt, "ground-truth pairs file")->required();
+  app->add_option("--window,-w", request->window, "tolerance in frames (0: exact)")
+      ->check(CLI::NonNegativeNumber);
+  app->add_option("--plots", request->plots_dir,
+                  "write PNG figures (precision-recall, score, vocabulary, quantisation error, "
+                  "WM size, time per frame) into this folder");
+  app->add_option("--map", request->map_path,
+                  "take the series the log lacks (vocabulary, WM, times) from this map");
+  app->add_option("--session", *session, "session of --map the log belongs to (default: last)");
+  app->add_flag("--json", *json, "one JSON object, as score_loops.py --json");
+  return {app, [request, json, session, app]() {
+            if (app->count("--session")) request->session = *session;
+            EvalOutcome outcome = runEvaluation(*request);
+            const EvalFigures& figures = outcome.evaluation.figures;
+            std::fputs((*json ? figuresJson(figures) : figuresText(figures)).c_str(), stdout);
+            if (!*json)
+              for (const auto& plot : outcome.plots)
+                std::fputs(
+                    fmt::format("plot: {}\n", (request->plots_dir / plot.file).string()).c_str(),
+                    stdout);
+            return 0;
+          }};
+}
+
+}  // namespace placedb::cli

@@ -1,0 +1,177 @@
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <tuple>
+
+#include "commands.h"
+#include "placedb/error.h"
+#include "placedb/options.h"
+#include "placedb/storage/map_store.h"
+
+namespace placedb::cli {
+namespace {
+
+const char* tierName(storage::Tier tier) {
+  switch (tier) {
+    case storage::Tier::kSTM:
+      return "stm";
+    case storage::Tier::kWM:
+      return "wm";
+    case storage::Tier::kLTM:
+      return "ltm";
+  }
+  return "?";
+}
+
+const char* linkName(storage::LinkType type) {
+  switch (type) {
+    case storage::LinkType::kNeighbour:
+      return "neighbour";
+    case storage::LinkType::kLoopClosure:
+      return "loop_closure";
+    case storage::LinkType::kMerge:
+      return "merge";
+  }
+  return "?";
+}
+
+// Everything `info` reports, gathered read-only.
+nlohmann::json inspect(const std::string& path) {
+  if (!std::filesystem::exists(path))
+    throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", path));
+  storage::MapStore store(path, storage::OpenMode::kReadOnly);
+  nlohmann::json info;
+  info["path"] = path;
+  info["file_bytes"] = std::filesystem::file_size(path);
+  info["schema_version"] = store.schemaVersion();
+  info["frames"] = store.frameCount();
+  info["words"] = store.wordCount();
+
+  // Locations per tier, and which session made each one (for the links between sessions).
+  std::map<std::int64_t, std::int64_t> session_of;
+  nlohmann::json tiers;
+  std::int64_t locations = 0;
+  for (auto tier : {storage::Tier::kSTM, storage::Tier::kWM, storage::Tier::kLTM}) {
+    auto in_tier = store.locationsInTier(tier);
+    tiers[tierName(tier)] = in_tier.size();
+    locations += static_cast<std::int64_t>(in_tier.size());
+    for (const auto& l : in_tier)
+      if (auto record = store.location(l.id)) session_of[l.id] = record->session_id;
+  }
+  info["locations"] = locations;
+  info["locations_per_tier"] = tiers;
+
+  // Links whose two ends were created by different sessions, counted per session pair and type.
+  std::map<std::tuple<std::int64_t, std::int64_t, std::string>, std::int64_t> cross;
+  for (const auto& [id, session] : session_of)
+    for (const auto& link : store.links(id)) {
+      if (link.location_a != id) continue;  // each pair once
+      auto other = session_of.find(link.location_b);
+      if (other == session_of.end() || other->second == session) continue;
+      auto pair = std::minmax(session, other->second);
+      ++cross[{pair.first, pair.second, linkName(link.type)}];
+    }
+  nlohmann::json links = nlohmann::json::array();
+  for (const auto& [key, count] : cross)
+    links.push_back({{"session_a", std::get<0>(key)},
+                     {"session_b", std::get<1>(key)},
+                     {"type", std::get<2>(key)},
+                     {"count", count}});
+  info["links_between_sessions"] = links;
+
+  nlohmann::json sessions = nlohmann::json::array();
+  for (const auto& s : store.sessions()) {
+    auto last = store.lastFrameIndex(s.id);
+    sessions.push_back({{"id", s.id},
+                        {"source", s.source},
+                        {"started_at", s.started_at},
+                        {"ended_at", s.ended_at ? nlohmann::json(*s.ended_at) : nlohmann::json()},
+                        {"clean_close", s.clean_close},
+                        {"software_version", s.software_version},
+                        {"frames", store.frameCount(s.id)},
+                        {"last_source_index", last ? nlohmann::json(*last) : nlohmann::json()},
+                        {"settings", store.settings(s.id)}});
+  }
+  info["sessions"] = sessions;
+
+  nlohmann::json imports = nlohmann::json::array();
+  for (const auto& v : store.vocabularyImports())
+    imports.push_back({{"id", v.id},
+                       {"file", v.file},
+                       {"words", v.word_count},
+                       {"mode", v.mode == storage::VocabularyMode::kFixed ? "fixed" : "seed"},
+                       {"imported_at", v.imported_at}});
+  info["vocabulary_imports"] = imports;
+  return info;
+}
+
+std::string describe(const nlohmann::json& info) {
+  std::string text = fmt::format(
+      "map {}: {:.1f} MiB, schema version {}\n"
+      "frames {}, words {}, locations {} (STM {}, WM {}, LTM {})\n",
+      info["path"].get<std::string>(), info["file_bytes"].get<double>() / (1024.0 * 1024.0),
+      info["schema_version"].get<int>(), info["frames"].get<std::int64_t>(),
+      info["words"].get<std::int64_t>(), info["locations"].get<std::int64_t>(),
+      info["locations_per_tier"]["stm"].get<std::int64_t>(),
+      info["locations_per_tier"]["wm"].get<std::int64_t>(),
+      info["locations_per_tier"]["ltm"].get<std::int64_t>());
+  const auto defaults = Options().toSettings();
+  for (const auto& s : info["sessions"]) {
+    std::string state = s["clean_close"].get<bool>()
+                            ? "closed cleanly"
+                            : (s["ended_at"].is_null() ? "open or interrupted" : "ended");
+    text += fmt::format(
+        "session {}: {} frames (last index {}), {}, started {}{}\n  source {}\n",
+        s["id"].get<std::int64_t>(), s["frames"].get<std::int64_t>(),
+        s["last_source_index"].is_null() ? std::string("-") : s["last_source_index"].dump(), state,
+        s["started_at"].get<std::string>(),
+        s["ended_at"].is_null() ? "" : ", ended " + s["ended_at"].get<std::string>(),
+        s["source"].get<std::string>());
+    std::string changed;
+    for (const auto& [key, value] : s["settings"].items()) {
+      auto d = defaults.find(key);
+      if (d == defaults.end() || d->second != value.get<std::string>())
+        changed += fmt::format(" {}={}", key, value.get<std::string>());
+    }
+    text += fmt::format("  settings: {}\n", changed.empty() ? " defaults" : changed);
+  }
+  for (const auto& l : info["links_between_sessions"])
+    text += fmt::format("links between sessions {} and {}: {} {}\n",
+                        l["session_a"].get<std::int64_t>(), l["session_b"].get<std::int64_t>(),
+                        l["count"].get<std::int64_t>(), l["type"].get<std::string>());
+  if (info["links_between_sessions"].empty() && info["sessions"].size() > 1)
+    text += "no links between sessions\n";
+  for (const auto& v : info["vocabulary_imports"])
+    text += fmt::format("vocabulary import {}: {} words from {} ({})\n",
+                        v["id"].get<std::int64_t>(), v["words"].get<std::int64_t>(),
+                        v["file"].get<std::string>(), v["mode"].get<std::string>());
+  return text;
+}
+
+}  // namespace
+
+Command addInfoCommand(CLI::App& parent) {
+  auto path = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  CLI::App* app = parent.add_subcommand("info", "Describe what a map holds (read-only)");
+  app->footer(
+      "Print a map's sessions (source, frames, state, settings that differ from the defaults),\n"
+      "its locations per memory tier, words, links between sessions, vocabulary imports and file\n"
+      "size. The map is opened read-only; a running `placedb map` is not disturbed.\n\n"
+      "Examples:\n"
+      "  placedb info run.placedb\n"
+      "  placedb info run.placedb --json | jq '.sessions[].frames'");
+  app->add_option("MAP", *path, "map file")->required();
+  app->add_flag("--json", *json, "print one JSON object (all settings included)");
+  return {app, [path, json]() {
+            nlohmann::json info = inspect(*path);
+            std::fputs((*json ? info.dump(2) + "\n" : describe(info)).c_str(), stdout);
+            return 0;
+          }};
+}
+
+}  // namespace placedb::cli

@@ -1,0 +1,88 @@
+#include <fmt/format.h>
+
+#include <cstdio>
+
+#include "commands.h"
+#include "mapping_run.h"
+#include "settings_input.h"
+
+namespace placedb::cli {
+
+// The settings options are shared by `map` and `demo`.
+void addSettingsOptions(CLI::App& app, SettingsInput& settings) {
+  app.add_option("--set", settings.assignments,
+                 "engine setting KEY=VALUE, repeatable; wins over --config and --preset "
+                 "(`placedb settings` lists them)")
+      ->type_name("KEY=VALUE")
+      ->allow_extra_args(false);
+  app.add_option("--config", settings.config_file,
+                 "settings file: `key = value` lines ('#' comments) or one JSON object");
+  app.add_option("--preset", settings.preset,
+                 "start from a preset: `paper` (paper 000, table 4) or `default`");
+}
+
+Command addMapCommand(CLI::App& parent) {
+  auto request = std::make_shared<MappingRequest>();
+  auto stop_after = std::make_shared<std::int64_t>(0);
+  CLI::App* app = parent.add_subcommand("map", "Map an image sequence (creates or continues MAP)");
+  app->footer(
+      "Process every frame of SOURCE into MAP, detecting loop closures.\n\n"
+      "SOURCE is an image folder (natural order: 2.jpg before 10.jpg; non-image files are\n"
+      "skipped), a list file (one image path a line, relative to the list file; blank lines\n"
+      "and '#' comments ignored) or a video file (.mp4, .avi, .mkv, ...).\n\n"
+      "MAP is created when missing. If its last session ran over the same SOURCE and did not\n"
+      "reach its end (a crash, Ctrl-C or --stop-after), that session resumes with the first\n"
+      "frame not yet processed; otherwise a new session starts. Frame numbers always count from\n"
+      "the start of SOURCE. Unreadable images are recorded as bad frames with a warning.\n\n"
+      "Settings: defaults < --preset < --config < --set. A resumed session keeps its settings.\n\n"
+      "The --log CSV has one row per frame processed by this invocation (appended when the file\n"
+      "exists): frame,candidate_frames,score,accepted,time_ms, then outcome, location,\n"
+      "posterior, words_created, vocabulary_size, wm_size, stm_size, mean_quantisation_error,\n"
+      "feature_count, transferred, retrieved, per-stage times (features_ms ... storage_ms),\n"
+      "session, other_candidates, rejected_reason. candidate_frames lists only frames of this\n"
+      "session (indices into SOURCE); frames of other sessions go to other_candidates as\n"
+      "SESSION:INDEX.\n\n"
+      "Examples:\n"
+      "  placedb map run.placedb /data/lip6_outdoor/frames.txt --log run.csv\n"
+      "  placedb map run.placedb images/ --set t_loop=0.2 --set wm_max=300\n"
+      "  placedb map run.placedb walk.mp4 --preset paper --stop-after 500   # later: same again");
+  app->add_option("MAP", request->map_path, "map file (SQLite)")->required();
+  app->add_option("SOURCE", request->source, "image folder, list file or video")->required();
+  app->add_option("--log", request->log_path, "write (or append) the per-frame CSV log");
+  addSettingsOptions(*app, request->settings);
+  app->add_option("--stop-after", *stop_after,
+                  "process at most N frames, then close; the next `map` resumes")
+      ->check(CLI::PositiveNumber);
+  app->add_flag("--new-session", request->new_session,
+                "start a new session even if the last one over SOURCE is unfinished");
+  app->add_flag("--quiet,-q", request->quiet, "no progress output");
+  return {app, [request, stop_after, app]() {
+            if (app->count("--stop-after")) request->stop_after = *stop_after;
+            MappingSummary s = runMapping(*request);
+            if (!request->quiet) {
+              std::string why = s.interrupted     ? "interrupted; run again to resume"
+                                : s.stopped_early ? "stopped by --stop-after; run again to resume"
+                                                  : "end of source";
+              std::fputs(fmt::format("placedb: session {}: {} frames ({} unreadable) in {:.1f} s, "
+                                     "{} new locations, {} loop closures ({})\n",
+                                     s.session_id, s.processed, s.unreadable, s.seconds,
+                                     s.locations_created, s.loop_closures, why)
+                             .c_str(),
+                         stderr);
+            }
+            return 0;
+          }};
+}
+
+Command addSettingsCommand(CLI::App& parent) {
+  CLI::App* app = parent.add_subcommand("settings", "List every engine setting with its default");
+  app->footer(
+      "List the engine settings accepted by --set KEY=VALUE and --config, with default and\n"
+      "valid values.\n\nExample:\n  placedb settings");
+  return {app, []() {
+            std::fputs(settingsHelp().c_str(), stdout);
+            return 0;
+          }};
+}
+
+}  // namespace placedb::cli

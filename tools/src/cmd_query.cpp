@@ -1,0 +1,112 @@
+#include <fmt/format.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "commands.h"
+#include "exit_codes.h"
+#include "image_source.h"
+#include "placedb/map.h"
+#include "placedb/storage/map_store.h"
+
+namespace placedb::cli {
+namespace {
+
+struct QueryRequest {
+  std::string map_path;
+  std::vector<std::string> images;
+  std::size_t top = 5;
+  bool json = false;
+};
+
+// The settings of the map's last session: localisation must extract features the same way.
+Options storedOptions(const std::string& map_path) {
+  if (!std::filesystem::exists(map_path))
+    throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", map_path));
+  storage::MapStore store(map_path, storage::OpenMode::kReadOnly);
+  auto last = store.lastSession();
+  if (!last)
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("map {} has no session yet: map a sequence first", map_path));
+  return Options::fromSettings(store.settings(last->id));
+}
+
+nlohmann::json framesJson(const std::vector<FrameRef>& frames) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& f : frames)
+    list.push_back({{"session", f.session_id},
+                    {"frame_id", f.frame_id},
+                    {"source_index", f.source_index},
+                    {"path", f.source_path}});
+  return list;
+}
+
+int runQuery(const QueryRequest& request) {
+  Options options = storedOptions(request.map_path);
+  auto map = Map::open(request.map_path, options, Map::Mode::kLocalisation);
+  nlohmann::json out = nlohmann::json::array();
+  int status = 0;
+  for (const auto& image_path : request.images) {
+    std::string problem;
+    cv::Mat image = readImageFile(image_path, problem);
+    if (image.empty()) {
+      printError(fmt::format("cannot read image {}: {}", image_path, problem));
+      status = exitCodeFor(ErrorCode::kIo);
+      out.push_back({{"image", image_path}, {"error", problem}});
+      continue;
+    }
+    QueryResult result = map->query(image, request.top);
+    if (request.json) {
+      nlohmann::json matches = nlohmann::json::array();
+      for (const auto& m : result.matches)
+        matches.push_back({{"location", m.location_id},
+                           {"similarity", m.similarity},
+                           {"frames", framesJson(m.frames)}});
+      out.push_back({{"image", image_path},
+                     {"feature_count", result.feature_count},
+                     {"time_ms", result.time_ms},
+                     {"matches", matches}});
+      continue;
+    }
+    std::string text =
+        fmt::format("{}: {} features, {:.1f} ms, {} match{}\n", image_path, result.feature_count,
+                    result.time_ms, result.matches.size(), result.matches.size() == 1 ? "" : "es");
+    for (std::size_t i = 0; i < result.matches.size(); ++i) {
+      const QueryMatch& m = result.matches[i];
+      text +=
+          fmt::format("  {}. location {}  similarity {:.4f}  ({} frame{})\n", i + 1, m.location_id,
+                      m.similarity, m.frames.size(), m.frames.size() == 1 ? "" : "s");
+      for (const auto& f : m.frames)
+        text += fmt::format("       session {} frame {}  {}\n", f.session_id, f.source_index,
+                            f.source_path);
+    }
+    std::fputs(text.c_str(), stdout);
+  }
+  if (request.json) std::fputs((out.dump(2) + "\n").c_str(), stdout);
+  return status;
+}
+
+}  // namespace
+
+Command addQueryCommand(CLI::App& parent) {
+  auto request = std::make_shared<QueryRequest>();
+  CLI::App* app =
+      parent.add_subcommand("query", "Localise images against a map without changing it");
+  app->footer(
+      "Compare each IMAGE with every location stored in MAP (any memory tier) and print the\n"
+      "best locations with their similarity, the frames they cover and those frames' paths.\n"
+      "The map is opened read-only with the settings of its last session.\n"
+      "Exit status 3 when an image cannot be read (the others are still answered).\n\n"
+      "Examples:\n"
+      "  placedb query run.placedb photo.jpg\n"
+      "  placedb query run.placedb a.png b.png --top 3 --json");
+  app->add_option("MAP", request->map_path, "map file")->required();
+  app->add_option("IMAGE", request->images, "images to localise")->required();
+  app->add_option("--top,-k", request->top, "locations to print per image")
+      ->check(CLI::PositiveNumber);
+  app->add_flag("--json", request->json, "print one JSON array");
+  return {app, [request]() { return runQuery(*request); }};
+}
+
+}  // namespace placedb::cli

@@ -1,0 +1,119 @@
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+
+#include "commands.h"
+#include "placedb/error.h"
+#include "placedb/storage/map_store.h"
+#include "vocabulary/vocabulary_file.h"
+
+namespace placedb::cli {
+namespace {
+
+struct VocabRequest {
+  std::string map_path, file, mode = "fixed";
+  bool text = false;
+};
+
+// Every word stored in the map (all memory tiers), ascending ids, with the last session's
+// settings: the extractor and distance unit the words were made with.
+vocab::VocabularyData wordsOfMap(const std::string& map_path) {
+  if (!std::filesystem::exists(map_path))
+    throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", map_path));
+  storage::MapStore store(map_path, storage::OpenMode::kReadOnly);
+  auto last = store.lastSession();
+  if (!last)
+    throw Error(ErrorCode::kInvalidArgument, fmt::format("map {} has no session", map_path));
+  vocab::VocabularyData data;
+  data.settings = store.settings(last->id);
+  data.extractor = data.settings.count("extractor") ? data.settings.at("extractor") : "surf";
+  data.unit =
+      data.settings.count("distance_unit") && data.settings.at("distance_unit") == "euclidean"
+          ? vocab::DistanceUnit::kEuclidean
+          : vocab::DistanceUnit::kSquared;
+  data.type = DescriptorType::kFloat32;
+
+  std::vector<std::vector<float>> rows;
+  const std::int64_t max_id = store.maxWordId().value_or(0);
+  constexpr std::int64_t kChunk = 20000;  // bounded statements, bounded memory per query
+  for (std::int64_t first = 0; first <= max_id; first += kChunk) {
+    std::vector<std::int64_t> ids;
+    for (std::int64_t id = first; id < std::min(first + kChunk, max_id + 1); ++id)
+      ids.push_back(id);
+    for (const auto& word : store.loadWords(ids)) {
+      if (word.type != storage::DescriptorKind::kFloat32)
+        throw Error(ErrorCode::kInvalidArgument, "vocab export supports float descriptors only");
+      if (data.dim == 0) data.dim = word.dim;
+      if (word.dim != data.dim)
+        throw Error(ErrorCode::kInternal, fmt::format("word {} has dimension {}, others {}",
+                                                      word.id, word.dim, data.dim));
+      data.ids.push_back(word.id);
+      data.created_frames.push_back(word.created_frame.value_or(-1));
+      rows.push_back(word.floats());
+    }
+  }
+  data.descriptors = cv::Mat(static_cast<int>(rows.size()), std::max(data.dim, 1), CV_32F);
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    std::copy(rows[i].begin(), rows[i].end(), data.descriptors.ptr<float>(static_cast<int>(i)));
+  if (rows.empty()) data.descriptors = cv::Mat(0, data.dim, CV_32F);
+  return data;
+}
+
+int runExport(const VocabRequest& request) {
+  vocab::VocabularyData data = wordsOfMap(request.map_path);
+  if (request.text)
+    vocab::writeVocabularyText(request.file, data);
+  else
+    vocab::writeVocabularyFile(request.file, data);
+  std::fputs(fmt::format("placedb: wrote {} words ({}, dimension {}) to {}\n", data.ids.size(),
+                         data.extractor, data.dim, request.file)
+                 .c_str(),
+             stderr);
+  return 0;
+}
+
+int runImport(const VocabRequest& request) {
+  if (request.mode != "fixed" && request.mode != "seed")
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("--mode {} is not valid (valid: fixed|seed)", request.mode));
+  // Validate the file now, so a bad file is refused with its reason even before import exists.
+  vocab::VocabularyData data = request.text ? vocab::readVocabularyText(request.file)
+                                            : vocab::readVocabularyFile(request.file);
+  throw Error(ErrorCode::kInvalidArgument,
+              fmt::format("vocab import is not available yet: {} holds {} valid words, but the "
+                          "engine cannot load imported words into a map",
+                          request.file, data.ids.size()));
+}
+
+}  // namespace
+
+Command addVocabCommand(CLI::App& parent) {
+  auto request = std::make_shared<VocabRequest>();
+  CLI::App* app = parent.add_subcommand("vocab", "Export or import a map's visual vocabulary");
+  app->footer(
+      "Move a visual vocabulary between maps.\n\n"
+      "Examples:\n"
+      "  placedb vocab export run.placedb words.pvoc           binary, checksummed\n"
+      "  placedb vocab export run.placedb words.txt --text     RTAB-Map text dictionary\n"
+      "  placedb vocab import words.pvoc new.placedb --mode fixed");
+  app->require_subcommand(1);
+  CLI::App* exporter = app->add_subcommand("export", "Write every word of MAP to FILE");
+  exporter->add_option("MAP", request->map_path, "map file")->required();
+  exporter->add_option("FILE", request->file, "vocabulary file to write")->required();
+  exporter->add_flag("--text", request->text, "RTAB-Map's text form: `WordID d1 ... dN` lines");
+  CLI::App* importer = app->add_subcommand("import", "Load FILE's words into MAP");
+  importer->add_option("FILE", request->file, "vocabulary file")->required();
+  importer->add_option("MAP", request->map_path, "map file")->required();
+  importer
+      ->add_option("--mode", request->mode,
+                   "fixed: only these words, none created; seed: start from them")
+      ->required();
+  importer->add_flag("--text", request->text, "FILE is in the text form");
+  return {app, [request, exporter]() {
+            return exporter->parsed() ? runExport(*request) : runImport(*request);
+          }};
+}
+
+}  // namespace placedb::cli

@@ -1,0 +1,50 @@
+#include "exit_codes.h"
+
+#include <fmt/format.h>
+
+#include <cstdio>
+
+namespace placedb::cli {
+namespace {
+
+std::string oneLine(std::string text) {
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r')) text.pop_back();
+  for (char& c : text)
+    if (c == '\n' || c == '\r') c = ' ';
+  return text;
+}
+
+}  // namespace
+
+int exitCodeFor(ErrorCode code) {
+  int value = static_cast<int>(code);
+  // Codes are published by error.h in 2..10; anything else is a bug reported as internal.
+  if (value < 2 || value > 10) return static_cast<int>(ErrorCode::kInternal);
+  return value;
+}
+
+std::string exitCodeTable() {
+  return "Exit status:\n"
+         "   0  success\n"
+         "   2  invalid argument: bad command line, unknown setting or bad value\n"
+         "   3  I/O: unreadable source, image, log or config file\n"
+         "   4  map refused: not SQLite, not a placedb map, damaged, or newer than this binary\n"
+         "   5  map busy: another writer holds the map\n"
+         "   6  read-only: the map or its folder cannot be written\n"
+         "   7  disk full\n"
+         "   8  vocabulary file refused (magic, version, dimension, checksum, extractor)\n"
+         "   9  other storage (SQLite) failure\n"
+         "  10  internal error (a bug: please report it)\n"
+         "Ctrl-C during `map` finishes the current frame, closes the map cleanly (resumable) and\n"
+         "exits 0.\n";
+}
+
+void printError(const std::string& message) {
+  std::fputs(fmt::format("placedb: error: {}\n", oneLine(message)).c_str(), stderr);
+}
+
+void printWarning(const std::string& message) {
+  std::fputs(fmt::format("placedb: warning: {}\n", oneLine(message)).c_str(), stderr);
+}
+
+}  // namespace placedb::cli

@@ -1,0 +1,166 @@
+#include "frame_log.h"
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <iterator>
+
+#include "placedb/error.h"
+
+namespace placedb::cli {
+namespace {
+
+const char* outcomeName(FrameOutcome outcome) {
+  switch (outcome) {
+    case FrameOutcome::kNewLocation:
+      return "new";
+    case FrameOutcome::kMerged:
+      return "merged";
+    case FrameOutcome::kBad:
+      return "bad";
+  }
+  return "?";
+}
+
+// Enough digits to tell scores apart near the decision threshold, short enough to read.
+std::string number(double value) { return fmt::format("{:.6g}", value); }
+std::string millis(double value) { return fmt::format("{:.3f}", value); }
+
+}  // namespace
+
+const std::vector<std::string>& FrameLogWriter::columns() {
+  static const std::vector<std::string> kColumns = {"frame",
+                                                    "candidate_frames",
+                                                    "score",
+                                                    "accepted",
+                                                    "time_ms",
+                                                    "outcome",
+                                                    "location",
+                                                    "posterior",
+                                                    "words_created",
+                                                    "vocabulary_size",
+                                                    "wm_size",
+                                                    "stm_size",
+                                                    "mean_quantisation_error",
+                                                    "feature_count",
+                                                    "transferred",
+                                                    "retrieved",
+                                                    "features_ms",
+                                                    "quantisation_ms",
+                                                    "likelihood_ms",
+                                                    "filter_ms",
+                                                    "memory_ms",
+                                                    "storage_ms",
+                                                    "session",
+                                                    "other_candidates",
+                                                    "rejected_reason"};
+  return kColumns;
+}
+
+FrameLogWriter::FrameLogWriter(const std::filesystem::path& path) : path_(path.string()) {
+  std::error_code ec;
+  bool has_content = std::filesystem::exists(path, ec) && std::filesystem::file_size(path, ec) > 0;
+  file_ = std::fopen(path_.c_str(), "a");
+  if (!file_) throw Error(ErrorCode::kIo, fmt::format("cannot write log {}", path_));
+  if (!has_content) {
+    std::string header;
+    for (const auto& name : columns()) header += (header.empty() ? "" : ",") + name;
+    std::fputs((header + "\n").c_str(), file_);
+    std::fflush(file_);
+  }
+}
+
+FrameLogWriter::~FrameLogWriter() {
+  if (file_) std::fclose(file_);
+}
+
+void FrameLogWriter::write(const FrameResult& r) {
+  std::string same_session, other_sessions;
+  for (const auto& ref : r.hypothesis.frames) {
+    if (ref.session_id == r.session_id)
+      same_session += (same_session.empty() ? "" : " ") + std::to_string(ref.source_index);
+    else
+      other_sessions += fmt::format("{}{}:{}", other_sessions.empty() ? "" : " ", ref.session_id,
+                                    ref.source_index);
+  }
+  const StageTimes& t = r.times;
+  std::string row = fmt::format(
+      "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+      r.source_index, same_session, number(r.hypothesis.score), r.hypothesis.accepted ? 1 : 0,
+      millis(t.total), outcomeName(r.outcome), r.location_id, number(r.hypothesis.posterior),
+      r.words_created, r.vocabulary_size, r.wm_size, r.stm_size, number(r.mean_quantisation_error),
+      r.feature_count, r.transferred, r.retrieved, millis(t.features), millis(t.quantisation),
+      millis(t.likelihood), millis(t.filter), millis(t.memory), millis(t.storage), r.session_id,
+      other_sessions, csvField(r.hypothesis.rejected_reason));
+  if (std::fputs(row.c_str(), file_) < 0 || std::fflush(file_) != 0)
+    throw Error(ErrorCode::kIo, fmt::format("cannot write log {}", path_));
+}
+
+int CsvTable::column(const std::string& name) const {
+  for (std::size_t i = 0; i < header.size(); ++i)
+    if (header[i] == name) return static_cast<int>(i);
+  return -1;
+}
+
+const std::string& CsvTable::cell(std::size_t row, int column) const {
+  static const std::string kEmpty;
+  if (column < 0 || row >= rows.size()) return kEmpty;
+  const auto& fields = rows[row];
+  return static_cast<std::size_t>(column) < fields.size() ? fields[column] : kEmpty;
+}
+
+std::vector<std::string> splitCsvLine(const std::string& line) {
+  std::vector<std::string> fields(1);
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        fields.back() += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        fields.back() += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      fields.emplace_back();
+    } else if (c != '\r') {
+      fields.back() += c;
+    }
+  }
+  return fields;
+}
+
+std::string csvField(const std::string& text) {
+  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (char c : text) {
+    if (c == '"') quoted += '"';
+    quoted += (c == '\n' || c == '\r') ? ' ' : c;
+  }
+  return quoted + "\"";
+}
+
+CsvTable readCsv(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(ErrorCode::kIo, fmt::format("cannot read {}", path.string()));
+  CsvTable table;
+  std::string line;
+  bool first = true;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (first) {
+      table.header = splitCsvLine(line);
+      first = false;
+      continue;
+    }
+    if (line.empty()) continue;  // Python's csv.DictReader skips blank rows too
+    table.rows.push_back(splitCsvLine(line));
+  }
+  return table;
+}
+
+}  // namespace placedb::cli

@@ -1,0 +1,57 @@
+#pragma once
+// The per-frame CSV log of a mapping run (format of /work/shared/EVALUATION.md) and a small
+// CSV reader for `eval`.
+//
+// Columns: frame, candidate_frames, score, accepted, time_ms (the scored ones), then
+// outcome, location, posterior, words_created, vocabulary_size, wm_size, stm_size,
+// mean_quantisation_error, feature_count, transferred, retrieved, the stage times
+// features_ms ... storage_ms, session, other_candidates and rejected_reason.
+// candidate_frames holds the source indices of the hypothesis' frames from this session only:
+// frames of earlier sessions are not indices of this source, so they go to other_candidates as
+// "session:index" pairs.
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "placedb/map.h"
+
+namespace placedb::cli {
+
+class FrameLogWriter {
+ public:
+  // Appends to an existing non-empty log (no second header); creates it otherwise.
+  // Throws placedb::Error(kIo) when it cannot be opened.
+  explicit FrameLogWriter(const std::filesystem::path& path);
+  ~FrameLogWriter();
+  FrameLogWriter(const FrameLogWriter&) = delete;
+  FrameLogWriter& operator=(const FrameLogWriter&) = delete;
+
+  void write(const FrameResult& result);  // flushed, so a killed run keeps its rows
+
+  static const std::vector<std::string>& columns();
+
+ private:
+  std::FILE* file_ = nullptr;
+  std::string path_;
+};
+
+// A CSV table with a header row; fields may be quoted ("a, b" and "" escapes).
+struct CsvTable {
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+
+  // -1 when absent.
+  int column(const std::string& name) const;
+  // Empty when the column is absent or the row is short.
+  const std::string& cell(std::size_t row, int column) const;
+};
+
+// Throws placedb::Error(kIo) when unreadable.
+CsvTable readCsv(const std::filesystem::path& path);
+std::vector<std::string> splitCsvLine(const std::string& line);
+std::string csvField(const std::string& text);  // quotes when needed
+
+}  // namespace placedb::cli

@@ -1,0 +1,62 @@
+#pragma once
+// Where `placedb map` reads its frames from: an image folder, a list file or a video.
+//
+// - Folder: the files whose extension OpenCV's imread knows, in natural order (2.jpg before
+//   10.jpg); other files are skipped and reported by skippedFiles().
+// - List file: one image path a line, relative to the list file's folder; blank lines and
+//   lines starting with '#' are ignored.
+// - Video (by extension: .mp4 .avi .mkv .mov ...): read with cv::VideoCapture; the frame index
+//   is the index in the video.
+// Frame indices always count from the start of the source, also when reading starts later.
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace placedb::cli {
+
+struct SourceFrame {
+  std::int64_t index = 0;
+  std::string path;     // the image file, or "<video>#<index>" for a video
+  cv::Mat image;        // empty when unreadable
+  std::string problem;  // why the image could not be read; empty when it was
+};
+
+class ImageSource {
+ public:
+  // Throws placedb::Error(kIo) when the source is missing or cannot be opened.
+  static std::unique_ptr<ImageSource> open(const std::string& source);
+  virtual ~ImageSource() = default;
+
+  // Canonical absolute path: resuming compares it with the session's stored source.
+  virtual const std::string& canonicalPath() const = 0;
+  virtual std::string kind() const = 0;  // "folder", "list" or "video"
+  // Number of frames, when known (a video's count is the container's estimate).
+  virtual std::optional<std::int64_t> size() const = 0;
+  // The next frame read() returns is `index`.
+  virtual void seek(std::int64_t index) = 0;
+  // False at the end of the source.
+  virtual bool read(SourceFrame& frame) = 0;
+  // Folder entries that are not images, skipped.
+  virtual std::vector<std::string> skippedFiles() const { return {}; }
+};
+
+// Natural order: digit runs compare as numbers ("img2" < "img10"), the rest byte by byte.
+bool naturalLess(const std::string& a, const std::string& b);
+bool hasImageExtension(const std::filesystem::path& path);
+bool hasVideoExtension(const std::filesystem::path& path);
+// The image paths of a list file, resolved against the list file's folder.
+// Throws placedb::Error(kIo) when the file cannot be read or is binary.
+std::vector<std::string> readListFile(const std::filesystem::path& list_file);
+// Folder entries in natural order: images go to `images`, the rest to `skipped`.
+void listImageFolder(const std::filesystem::path& folder, std::vector<std::string>& images,
+                     std::vector<std::string>& skipped);
+// Reads and decodes one image; on failure returns an empty Mat and sets `problem`.
+// A JPEG without its end marker counts as truncated, even if a decoder would salvage part of it.
+cv::Mat readImageFile(const std::string& path, std::string& problem);
+
+}  // namespace placedb::cli

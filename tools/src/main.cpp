@@ -1,0 +1,77 @@
+// placedb: the command line. Dispatches to one subcommand and turns every failure into one
+// "placedb: error: ..." line and a documented exit status (see exit_codes.h).
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "commands.h"
+#include "exit_codes.h"
+#include "placedb/error.h"
+#include "placedb/version.h"
+
+namespace {
+
+using placedb::cli::Command;
+
+int run(int argc, char** argv) {
+  CLI::App app{fmt::format(
+      "placedb {}: appearance-based loop-closure detection with a SQLite map.\n\n"
+      "Typical use:\n"
+      "  placedb map run.placedb images/ --log run.csv      map a folder, log every frame\n"
+      "  placedb eval run.csv gt_pairs.txt --plots plots/   score the run, draw its figures\n"
+      "  placedb query run.placedb photo.jpg                where was this photo taken?\n"
+      "  placedb info run.placedb                           what the map holds\n"
+      "  placedb demo --out demo-output                     all of it on a synthetic tour\n",
+      PLACEDB_VERSION_STRING)};
+  app.name("placedb");
+  app.footer(placedb::cli::exitCodeTable());
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string(PLACEDB_VERSION_STRING));
+  app.failure_message([](const CLI::App* failed, const CLI::Error& e) {
+    return fmt::format("placedb: error: {}\nRun `{} --help` for usage.\n", e.what(),
+                       failed->get_parent() ? "placedb " + failed->get_name() : "placedb");
+  });
+
+  std::vector<Command> commands = {
+      placedb::cli::addMapCommand(app),     placedb::cli::addQueryCommand(app),
+      placedb::cli::addInfoCommand(app),    placedb::cli::addVocabCommand(app),
+      placedb::cli::addEvalCommand(app),    placedb::cli::addDemoCommand(app),
+      placedb::cli::addSettingsCommand(app)};
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    int code = app.exit(e);  // prints help, version or the failure message
+    return code == 0 ? placedb::cli::kExitOk : placedb::cli::kExitUsage;
+  }
+  for (const auto& command : commands)
+    if (command.app->parsed()) return command.run();
+  return placedb::cli::kExitUsage;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using placedb::cli::printError;
+  try {
+    return run(argc, argv);
+  } catch (const placedb::Error& e) {
+    printError(e.what());
+    return placedb::cli::exitCodeFor(e.code());
+  } catch (const cv::Exception& e) {
+    printError(fmt::format("OpenCV: {}", e.what()));
+    return placedb::cli::exitCodeFor(placedb::ErrorCode::kInternal);
+  } catch (const std::bad_alloc&) {
+    printError("out of memory");
+    return placedb::cli::exitCodeFor(placedb::ErrorCode::kInternal);
+  } catch (const std::exception& e) {
+    printError(e.what());
+    return placedb::cli::exitCodeFor(placedb::ErrorCode::kInternal);
+  } catch (...) {
+    printError("unknown failure");
+    return placedb::cli::exitCodeFor(placedb::ErrorCode::kInternal);
+  }
+}

@@ -1,0 +1,116 @@
+#include "settings_input.h"
+
+#include <fmt/format.h>
+
+#include <cctype>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+
+#include "placedb/error.h"
+
+namespace placedb::cli {
+namespace {
+
+std::string trim(const std::string& text) {
+  std::size_t first = 0, last = text.size();
+  while (first < last && std::isspace(static_cast<unsigned char>(text[first]))) ++first;
+  while (last > first && std::isspace(static_cast<unsigned char>(text[last - 1]))) --last;
+  return text.substr(first, last - first);
+}
+
+Settings parseJsonConfig(const std::string& content, const std::string& name) {
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(content);
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("config {}: bad JSON: {}", name, e.what()));
+  }
+  if (!doc.is_object())
+    throw Error(ErrorCode::kInvalidArgument, fmt::format("config {}: not a JSON object", name));
+  Settings settings;
+  for (const auto& [key, value] : doc.items()) {
+    if (value.is_string())
+      settings[key] = value.get<std::string>();
+    else if (value.is_number() || value.is_boolean())
+      settings[key] = value.dump();
+    else
+      throw Error(
+          ErrorCode::kInvalidArgument,
+          fmt::format("config {}: value of {} must be a string, number or boolean", name, key));
+  }
+  return settings;
+}
+
+Settings parseLineConfig(const std::string& content, const std::string& name) {
+  Settings settings;
+  std::size_t start = 0;
+  int line_number = 0;
+  while (start < content.size()) {
+    std::size_t end = content.find('\n', start);
+    if (end == std::string::npos) end = content.size();
+    std::string line = content.substr(start, end - start);
+    start = end + 1;
+    ++line_number;
+    if (auto hash = line.find('#'); hash != std::string::npos) line.erase(hash);
+    line = trim(line);
+    if (line.empty()) continue;
+    auto eq = line.find('=');
+    if (eq == std::string::npos || trim(line.substr(0, eq)).empty())
+      throw Error(ErrorCode::kInvalidArgument,
+                  fmt::format("config {} line {}: expected `key = value`, got `{}`", name,
+                              line_number, line));
+    settings[trim(line.substr(0, eq))] = trim(line.substr(eq + 1));
+  }
+  return settings;
+}
+
+}  // namespace
+
+Settings parseAssignments(const std::vector<std::string>& assignments) {
+  Settings settings;
+  for (const auto& text : assignments) {
+    auto eq = text.find('=');
+    if (eq == std::string::npos || trim(text.substr(0, eq)).empty())
+      throw Error(
+          ErrorCode::kInvalidArgument,
+          fmt::format("--set expects KEY=VALUE, got `{}` (see `placedb map --help`)", text));
+    settings[trim(text.substr(0, eq))] = trim(text.substr(eq + 1));
+  }
+  return settings;
+}
+
+Settings readConfigFile(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(ErrorCode::kIo, fmt::format("cannot read config file {}", path.string()));
+  std::string content((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string head = trim(content);
+  if (!head.empty() && head[0] == '{') return parseJsonConfig(content, path.string());
+  return parseLineConfig(content, path.string());
+}
+
+Options presetOptions(const std::string& preset) {
+  if (preset.empty() || preset == "default") return Options();
+  if (preset == "paper") return Options::paperPreset();
+  throw Error(ErrorCode::kInvalidArgument,
+              fmt::format("unknown preset `{}` (valid: default|paper)", preset));
+}
+
+Options resolveOptions(const SettingsInput& input) {
+  Options base = presetOptions(input.preset);
+  Settings merged;
+  if (!input.config_file.empty()) merged = readConfigFile(input.config_file);
+  for (const auto& [key, value] : parseAssignments(input.assignments)) merged[key] = value;
+  return Options::fromSettings(merged, base);
+}
+
+std::string settingsHelp() {
+  std::string text = "Settings (--set KEY=VALUE; default and valid values):\n";
+  for (const auto& info : Options::catalogue())
+    text += fmt::format("  {:<20} {:<10} {:<22} {}\n", info.key, info.default_value, info.valid,
+                        info.description);
+  return text;
+}
+
+}  // namespace placedb::cli

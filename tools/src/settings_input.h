@@ -1,0 +1,36 @@
+#pragma once
+// Engine settings from the command line: `--preset paper`, `--config FILE`, `--set key=value`.
+// Precedence: defaults (or the preset) < config file < --set. Options::fromSettings refuses
+// unknown keys and bad values with the list of valid ones.
+//
+// Config file: either lines `key = value` (blank lines and '#' comments ignored; a '#' after a
+// value starts a comment too), or one JSON object {"key": value, ...} when the first
+// non-blank character is '{' (numbers and booleans are taken as their text).
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "placedb/options.h"
+
+namespace placedb::cli {
+
+using Settings = std::map<std::string, std::string>;
+
+struct SettingsInput {
+  std::string preset;                    // "" or "paper"
+  std::string config_file;               // "" when none
+  std::vector<std::string> assignments;  // "key=value", later ones win
+  bool empty() const { return preset.empty() && config_file.empty() && assignments.empty(); }
+};
+
+// Throws placedb::Error(kInvalidArgument) for an assignment without '=' or an empty key.
+Settings parseAssignments(const std::vector<std::string>& assignments);
+// Throws placedb::Error(kIo) when unreadable, kInvalidArgument when malformed.
+Settings readConfigFile(const std::filesystem::path& path);
+Options presetOptions(const std::string& preset);
+Options resolveOptions(const SettingsInput& input);
+// The catalogue as a help text: key, default, valid values, description.
+std::string settingsHelp();
+
+}  // namespace placedb::cli
