@@ -107,7 +107,7 @@ void printRecall(Vocabulary& vocabulary, ClusteredDescriptors& source, int queri
   std::printf("  recall@1 over %zu words, %d queries (brute force %.0f ms/query):\n", ids.size(),
               queries, brute_ms / queries);
   const int default_checks = vocabulary.options().checks;
-  for (int checks : {16, 32, 64, 128, 256}) {
+  for (int checks : {16, 32, 64, 96, 128, 256}) {
     vocabulary.setChecks(checks);
     int hits = 0;
     const auto t0 = std::chrono::steady_clock::now();

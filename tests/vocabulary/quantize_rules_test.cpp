@@ -184,12 +184,12 @@ TEST(EmptyVocabulary, FirstFeaturesCreateWords) {
   Vocabulary greedy(euclidean(WordRule::kGreedy), kDim, "test");
   Quantization q = greedy.quantize(rows(features), 0);
   EXPECT_EQ(q.word_of_feature, std::vector<std::int64_t>({0, 1, 0}));
-  // NNDR: the first feature creates word 0; with a single candidate NND = +inf, so the ratio
-  // test fails and the next features take word 0 (the documented convention).
+  // NNDR: the first feature creates word 0; the second has a single candidate, so the ratio
+  // cannot be tested and it creates word 1; the third is far nearer word 0 than word 1.
   Vocabulary nndr(euclidean(WordRule::kNndr), kDim, "test");
   q = nndr.quantize(rows(features), 0);
-  EXPECT_EQ(q.word_of_feature, std::vector<std::int64_t>({0, 0, 0}));
-  EXPECT_NEAR(q.mean_error, (5.0 + 0.01) / 3, 1e-6);
+  EXPECT_EQ(q.word_of_feature, std::vector<std::int64_t>({0, 1, 0}));
+  EXPECT_NEAR(q.mean_error, 0.01 / 3, 1e-6);
 }
 
 TEST(FixedMode, CreatesNothingAndTakesNearestWords) {

@@ -80,14 +80,15 @@ float Vocabulary::inUnit(float dist2) const {
 bool Vocabulary::decideNewWord(const std::vector<Neighbor>& best) const {
   if (best.empty()) return true;  // ND = NND = +inf
   const float nd = inUnit(best[0].dist2);
-  const float nnd =
-      best.size() > 1 ? inUnit(best[1].dist2) : std::numeric_limits<float>::infinity();
   if (options_.rule == WordRule::kGreedy) {
     if (nd > options_.t_nd2) return true;
     if (nd < options_.t_nd1) return false;
   }
-  // ND/NND > T_NNDR, written without the division: +inf NND gives false, 0/0 gives false.
-  return nd > options_.t_nndr * nnd;
+  // Without a second word the ratio cannot show the match is distinctive: a new word. (Taking
+  // the only word instead sends every later feature of an NNDR run to word 0, forever.)
+  if (best.size() < 2) return true;
+  // ND/NND > T_NNDR, written without the division: 0/0 gives false.
+  return nd > options_.t_nndr * inUnit(best[1].dist2);
 }
 
 void Vocabulary::addWord(std::int64_t id, std::int64_t created_frame, const float* descriptor,
