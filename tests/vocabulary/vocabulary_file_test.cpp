@@ -176,6 +176,35 @@ TEST_F(VocabularyFile, RefusesHugeDeclaredSizesWithoutAllocating) {
   refusal(long_header);
 }
 
+// A poor man's fuzzer: random damage gives a typed refusal (or, for a flip the checksums cannot
+// see, a successful read), never a crash or another exception.
+TEST_F(VocabularyFile, RandomDamageIsAlwaysATypedRefusal) {
+  std::mt19937 rng(17);
+  const fs::path damaged = dir_ / "fuzzed.pvoc";
+  int refused = 0;
+  for (int round = 0; round < 300; ++round) {
+    std::string bytes = bytes_;
+    std::uniform_int_distribution<std::size_t> anywhere(0, bytes.size() - 1);
+    switch (round % 3) {
+      case 0:  // a few random bytes
+        for (int i = 0; i < 1 + round % 4; ++i) bytes[anywhere(rng)] = char(rng());
+        break;
+      case 1:  // random length fields near the front
+        for (int i = 0; i < 4; ++i) bytes[8 + (rng() % 32)] = char(rng());
+        break;
+      default:  // truncation plus garbage
+        bytes.resize(anywhere(rng));
+        bytes += std::string(rng() % 64, char(rng()));
+    }
+    writeBytes(damaged, bytes);
+    const ErrorCode code = codeOf([&] { readVocabularyFile(damaged, {"surf-test-v1", 8}); });
+    if (bytes == bytes_) continue;
+    EXPECT_EQ(code, ErrorCode::kVocabularyRefused) << "round " << round;
+    refused += code == ErrorCode::kVocabularyRefused;
+  }
+  EXPECT_GT(refused, 250);
+}
+
 TEST_F(VocabularyFile, MissingFileIsAnIoError) {
   EXPECT_EQ(codeOf([&] { readVocabularyFile(dir_ / "absent.pvoc"); }), ErrorCode::kIo);
 }

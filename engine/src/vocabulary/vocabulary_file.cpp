@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "placedb/error.h"
@@ -105,6 +106,7 @@ std::string payloadBytes(const VocabularyData& data) {
   const std::size_t n = data.ids.size();
   std::string bytes;
   bytes.reserve(n * (16 + 4 * std::size_t(data.dim)));
+  if (n == 0) return bytes;
   bytes.append(reinterpret_cast<const char*>(data.ids.data()), n * 8);
   bytes.append(reinterpret_cast<const char*>(data.created_frames.data()), n * 8);
   for (std::size_t i = 0; i < n; ++i) {
@@ -223,7 +225,8 @@ VocabularyData readVocabularyFile(const std::filesystem::path& path,
     ar >> payload_length >> payload_crc;
     consumed += 12;
     const std::uint64_t word_bytes = 16 + 4 * std::uint64_t(data.dim);
-    if (count > (file_size - consumed) / word_bytes || payload_length != count * word_bytes) {
+    if (count > (file_size - consumed) / word_bytes || payload_length != count * word_bytes ||
+        count > std::uint64_t(std::numeric_limits<int>::max())) {
       refuse(path, "word count " + std::to_string(count) + " does not fit the payload");
     }
     if (payload_length != file_size - consumed) {
@@ -238,9 +241,11 @@ VocabularyData readVocabularyFile(const std::filesystem::path& path,
     data.ids.resize(n);
     data.created_frames.resize(n);
     data.descriptors.create(int(n), data.dim, CV_32F);
-    std::memcpy(data.ids.data(), payload.data(), n * 8);
-    std::memcpy(data.created_frames.data(), payload.data() + n * 8, n * 8);
-    if (n > 0) std::memcpy(data.descriptors.data, payload.data() + n * 16, n * 4 * data.dim);
+    if (n > 0) {  // memcpy from/to the null data() of empty vectors is undefined
+      std::memcpy(data.ids.data(), payload.data(), n * 8);
+      std::memcpy(data.created_frames.data(), payload.data() + n * 8, n * 8);
+      std::memcpy(data.descriptors.data, payload.data() + n * 16, n * 4 * data.dim);
+    }
     return data;
   } catch (const Error&) {
     throw;
