@@ -21,7 +21,9 @@ inline void expectCleanError(const ProcessResult& r, int code, const std::string
   EXPECT_EQ(r.exit_code, code) << r.err;
   EXPECT_EQ(r.err.rfind("placedb: error: ", 0), 0u) << r.err;
   EXPECT_EQ(r.err.find("terminate"), std::string::npos) << r.err;
-  if (!mentions.empty()) EXPECT_NE(r.err.find(mentions), std::string::npos) << r.err;
+  if (!mentions.empty()) {
+    EXPECT_NE(r.err.find(mentions), std::string::npos) << r.err;
+  }
 }
 
 inline std::string describe(const ProcessResult& r) {

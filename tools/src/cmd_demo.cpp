@@ -21,6 +21,25 @@ struct DemoRequest {
   SettingsInput settings;
 };
 
+// Word-wrapped, every line indented.
+std::string wrap(const std::string& text, int indent, int width) {
+  std::string out, line;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find(' ', start);
+    if (end == std::string::npos) end = text.size();
+    std::string word = text.substr(start, end - start);
+    start = end + 1;
+    if (!line.empty() && static_cast<int>(line.size() + word.size()) + 1 + indent > width) {
+      out += std::string(static_cast<std::size_t>(indent), ' ') + line + "\n";
+      line.clear();
+    }
+    line += (line.empty() ? "" : " ") + word;
+  }
+  if (!line.empty()) out += std::string(static_cast<std::size_t>(indent), ' ') + line + "\n";
+  return out;
+}
+
 std::string percent(const std::optional<double>& value) {
   return value ? fmt::format("{:.2f}%", *value) : "undefined";
 }
@@ -33,8 +52,8 @@ std::string explanation(const DemoRequest& request, const synthetic::SyntheticSe
       "\nWhat happened\n"
       "  A virtual camera drove {} frames through a synthetic town, driving some streets twice.\n"
       "  {} of those frames revisit a place seen before: the ground truth ({}).\n"
-      "  placedb mapped them into {} ({:.1f} s, {:.1f} frames/s): {} new locations, {} loop\n"
-      "  closures accepted. Every frame has a row in {}.\n\n"
+      "  placedb mapped them into {} ({:.1f} s, {:.1f} frames/s):\n"
+      "  {} new locations, {} loop closures accepted. Every frame has a row in {}.\n\n"
       "The scores (definitions of score_loops.py, also `placedb eval`)\n"
       "  recall at 100% precision: {:.2f}% (within 10 frames: {:.2f}%)\n"
       "      the share of revisiting frames recognised with a score above every wrong guess:\n"
@@ -50,14 +69,16 @@ std::string explanation(const DemoRequest& request, const synthetic::SyntheticSe
       exact.recall_at_100_precision, near.recall_at_100_precision, exact.accepted_true,
       exact.accepted_false, percent(exact.accepted_precision), percent(exact.accepted_recall),
       exact.time_ms_mean.value_or(0), exact.time_ms_p99.value_or(0), (out / "plots").string());
-  for (const auto& plot : plots) text += fmt::format("  {:<24} {}\n", plot.file, plot.what);
+  for (const auto& plot : plots) text += fmt::format("  {}\n{}", plot.file, wrap(plot.what, 6, 92));
   text += fmt::format(
       "\nNext\n"
-      "  placedb info {0}                       what the map holds\n"
-      "  placedb query {0} {1}   where was this image taken?\n"
-      "  placedb map {0} {2}         a second pass: a new session, linked to the first\n",
+      "  what the map holds:               placedb info {0}\n"
+      "  where was this image taken?:      placedb query {0} {1}\n"
+      "  a second pass, a second session:  placedb map {0} {2}\n"
+      "  the scores with a 10-frame window: placedb eval {3} {4} --window 10\n",
       (out / "demo.placedb").string(), (out / "sequence" / "images" / "000010.png").string(),
-      (out / "sequence" / "frames.txt").string());
+      (out / "sequence" / "frames.txt").string(), (out / "run.csv").string(),
+      (out / "sequence" / "gt_pairs.txt").string());
   return text;
 }
 
@@ -68,7 +89,8 @@ int runDemo(const DemoRequest& request) {
   if (ec)
     throw Error(ErrorCode::kIo, fmt::format("cannot create {}: {}", request.out, ec.message()));
   // The demo starts afresh each time: only the files it made itself are replaced.
-  for (const char* name : {"demo.placedb", "demo.placedb-wal", "demo.placedb-shm", "run.csv"})
+  for (const char* name : {"demo.placedb", "demo.placedb-wal", "demo.placedb-shm",
+                           "demo.placedb-lock", "demo.placedb-journal", "run.csv"})
     fs::remove(out / name, ec);
   fs::remove_all(out / "plots", ec);
 

@@ -135,9 +135,10 @@ std::string describe(const nlohmann::json& info) {
     for (const auto& [key, value] : s["settings"].items()) {
       auto d = defaults.find(key);
       if (d == defaults.end() || d->second != value.get<std::string>())
-        changed += fmt::format(" {}={}", key, value.get<std::string>());
+        changed +=
+            fmt::format("{}{}={}", changed.empty() ? "" : " ", key, value.get<std::string>());
     }
-    text += fmt::format("  settings: {}\n", changed.empty() ? " defaults" : changed);
+    text += fmt::format("  settings: {}\n", changed.empty() ? "defaults" : changed);
   }
   for (const auto& l : info["links_between_sessions"])
     text += fmt::format("links between sessions {} and {}: {} {}\n",

@@ -26,6 +26,15 @@ const char* outcomeName(FrameOutcome outcome) {
 std::string number(double value) { return fmt::format("{:.6g}", value); }
 std::string millis(double value) { return fmt::format("{:.3f}", value); }
 
+// EVALUATION.md: the score column is 0 where a check other than the final threshold (the ratio
+// test, a geometric check) rejected the hypothesis; raw_score keeps the filter's value.
+double scoredValue(const Hypothesis& h) {
+  const std::string& why = h.rejected_reason;
+  bool threshold_or_nothing = h.accepted || why.empty() || why == "below_threshold" ||
+                              why == "no_hypothesis" || why == "bad frame";
+  return threshold_or_nothing ? h.score : 0.0;
+}
+
 }  // namespace
 
 const std::vector<std::string>& FrameLogWriter::columns() {
@@ -53,7 +62,8 @@ const std::vector<std::string>& FrameLogWriter::columns() {
                                                     "storage_ms",
                                                     "session",
                                                     "other_candidates",
-                                                    "rejected_reason"};
+                                                    "rejected_reason",
+                                                    "raw_score"};
   return kColumns;
 }
 
@@ -84,14 +94,39 @@ void FrameLogWriter::write(const FrameResult& r) {
                                     ref.source_index);
   }
   const StageTimes& t = r.times;
-  std::string row = fmt::format(
-      "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-      r.source_index, same_session, number(r.hypothesis.score), r.hypothesis.accepted ? 1 : 0,
-      millis(t.total), outcomeName(r.outcome), r.location_id, number(r.hypothesis.posterior),
-      r.words_created, r.vocabulary_size, r.wm_size, r.stm_size, number(r.mean_quantisation_error),
-      r.feature_count, r.transferred, r.retrieved, millis(t.features), millis(t.quantisation),
-      millis(t.likelihood), millis(t.filter), millis(t.memory), millis(t.storage), r.session_id,
-      other_sessions, csvField(r.hypothesis.rejected_reason));
+  auto count = [](std::size_t n) { return std::to_string(n); };
+  // In the order of columns(); the check below keeps the two in step.
+  std::vector<std::string> fields = {std::to_string(r.source_index),
+                                     same_session,
+                                     number(scoredValue(r.hypothesis)),
+                                     r.hypothesis.accepted ? "1" : "0",
+                                     millis(t.total),
+                                     outcomeName(r.outcome),
+                                     std::to_string(r.location_id),
+                                     number(r.hypothesis.posterior),
+                                     count(r.words_created),
+                                     count(r.vocabulary_size),
+                                     count(r.wm_size),
+                                     count(r.stm_size),
+                                     number(r.mean_quantisation_error),
+                                     count(r.feature_count),
+                                     count(r.transferred),
+                                     count(r.retrieved),
+                                     millis(t.features),
+                                     millis(t.quantisation),
+                                     millis(t.likelihood),
+                                     millis(t.filter),
+                                     millis(t.memory),
+                                     millis(t.storage),
+                                     std::to_string(r.session_id),
+                                     other_sessions,
+                                     csvField(r.hypothesis.rejected_reason),
+                                     number(r.hypothesis.score)};
+  if (fields.size() != columns().size())
+    throw Error(ErrorCode::kInternal, "frame log: fields and columns differ");
+  std::string row;
+  for (const auto& field : fields) row += (row.empty() ? "" : ",") + field;
+  row += "\n";
   if (std::fputs(row.c_str(), file_) < 0 || std::fflush(file_) != 0)
     throw Error(ErrorCode::kIo, fmt::format("cannot write log {}", path_));
 }

@@ -5,7 +5,9 @@
 // Columns: frame, candidate_frames, score, accepted, time_ms (the scored ones), then
 // outcome, location, posterior, words_created, vocabulary_size, wm_size, stm_size,
 // mean_quantisation_error, feature_count, transferred, retrieved, the stage times
-// features_ms ... storage_ms, session, other_candidates and rejected_reason.
+// features_ms ... storage_ms, session, other_candidates, rejected_reason and raw_score.
+// score is 0 where a check other than the final threshold (the ratio test) rejected the
+// hypothesis, as EVALUATION.md asks; raw_score is the filter's loop probability regardless.
 // candidate_frames holds the source indices of the hypothesis' frames from this session only:
 // frames of earlier sessions are not indices of this source, so they go to other_candidates as
 // "session:index" pairs.

@@ -78,11 +78,16 @@ class Figure {
     plcol0(colour);
     plpoin(static_cast<PLINT>(n), x.data(), y.data(), glyph);
   }
+  void rug(const std::vector<double>& x, double y0, double y1, Colour colour) {
+    plcol0(colour);
+    plwidth(2.0);
+    for (double v : x) pljoin(v, y0, v, y1);
+  }
   void legend(const std::vector<std::pair<Colour, std::string>>& entries) {
     // A hand-placed text legend: PLplot's pllegend needs many parallel arrays for little gain.
     for (std::size_t i = 0; i < entries.size(); ++i) {
       plcol0(entries[i].first);
-      plmtex("t", -1.5 - 1.3 * static_cast<double>(i), 0.98, 1.0, entries[i].second.c_str());
+      plmtex("t", -1.5 - 1.3 * static_cast<double>(i), 0.02, 0.0, entries[i].second.c_str());
     }
     plcol0(kInk);
   }
@@ -140,12 +145,11 @@ std::vector<WrittenPlot> writePlots(const RunSeries& s, const std::vector<PrPoin
 
   if (!s.score.empty() && s.score.size() == s.frame.size()) {
     Range y = rangeOf(s.score, true);
-    y.hi = std::max(y.hi, 1.0);
+    y.hi = std::max(y.hi, 1.0) * 1.15;  // headroom for the legend
     Figure figure(folder / "score.png", rangeOf(s.frame, false), y, "frame", "loop-closure score",
                   "Best hypothesis' score per frame");
-    // Ground-truth loop frames as a grey rug along the bottom, accepted closures as red dots.
-    std::vector<double> rug(s.gt_loop_frames.size(), y.lo + 0.02 * (y.hi - y.lo));
-    figure.points(s.gt_loop_frames, rug, kGrey, 1);
+    // Ground-truth loop frames as a grey rug along the bottom, accepted closures as red circles.
+    figure.rug(s.gt_loop_frames, y.lo, y.lo + 0.05 * (y.hi - y.lo), kGrey);
     figure.line(s.frame, s.score, kBlue);
     std::vector<double> accepted_scores;
     for (double f : s.accepted_frames) {

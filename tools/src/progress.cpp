@@ -74,7 +74,8 @@ void ProgressReporter::clearLine() {
 }
 
 void ProgressReporter::finish() {
-  emit();
+  // Off a terminal the last periodic line may already be the final state.
+  if (terminal_ || done_ != done_at_last_emit_) emit();
   if (terminal_) std::fputs("\n", out_);
   std::fflush(out_);
 }
