@@ -6,6 +6,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
 #include <thread>
 
 #include "cli_test_support.h"
@@ -18,15 +19,15 @@ namespace fs = std::filesystem;
 using cli::CsvTable;
 using cli::readCsv;
 
-// 60 synthetic frames, written once per test process.
+// 60 synthetic frames in a folder of the calling test's own: ctest runs tests in parallel
+// processes, so a shared folder would be rewritten under another test's feet.
 fs::path demoSequence() {
-  static fs::path dir;
-  if (dir.empty()) {
-    dir = scratchDir("demo_sequence_60");
-    synthetic::SyntheticOptions options;
-    options.frames = 60;
-    synthetic::writeSequence(synthetic::SyntheticSequence(options), dir);
-  }
+  const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
+  fs::path dir =
+      scratchDir(std::string(test->test_suite_name()) + "_" + test->name() + "_sequence");
+  synthetic::SyntheticOptions options;
+  options.frames = 60;
+  synthetic::writeSequence(synthetic::SyntheticSequence(options), dir);
   return dir;
 }
 
@@ -100,6 +101,30 @@ TEST(CliRealSequence, MapEvalInfoQueryOnRtabmapSamples) {
     ASSERT_EQ(reference.exit_code, 0) << reference.err;
     EXPECT_EQ(ours.out, reference.out);
   }
+  auto json = placedb({"eval", log.string(), (data / "gt_pairs.txt").string(), "--json"}, dir);
+  auto json_reference =
+      run({"/usr/bin/python3", (datasetsDir() / ".." / "tools" / "score_loops.py").string(),
+           log.string(), (data / "gt_pairs.txt").string(), "--json"},
+          dir);
+  EXPECT_EQ(json.out, json_reference.out);
+
+  // A log in the bare reference format takes the series it lacks from the map.
+  {
+    std::ofstream bare(dir / "bare.csv");
+    bare << "frame,candidate_frames,score,accepted,time_ms\n";
+    for (std::size_t i = 0; i < table.rows.size(); ++i) {
+      for (int c = 0; c < 5; ++c)
+        bare << (c ? "," : "") << table.rows[i][static_cast<std::size_t>(c)];
+      bare << "\n";
+    }
+  }
+  auto from_map = placedb({"eval", (dir / "bare.csv").string(), (data / "gt_pairs.txt").string(),
+                           "--plots", (dir / "bare_plots").string(), "--map", map.string()},
+                          dir);
+  ASSERT_EQ(from_map.exit_code, 0) << describe(from_map);
+  EXPECT_FALSE(cv::imread((dir / "bare_plots" / "vocabulary.png").string()).empty());
+  EXPECT_FALSE(cv::imread((dir / "bare_plots" / "wm_size.png").string()).empty());
+
   auto plotted = placedb({"eval", log.string(), (data / "gt_pairs.txt").string(), "--plots",
                           (dir / "plots").string(), "--map", map.string()},
                          dir);
@@ -146,6 +171,12 @@ TEST(CliRealSequence, MapEvalInfoQueryOnRtabmapSamples) {
   EXPECT_EQ(fs::last_write_time(map), before);
   auto query_text = placedb({"query", map.string(), list[20]}, dir);
   EXPECT_NE(query_text.out.find("similarity"), std::string::npos) << query_text.out;
+  // An unreadable image is reported with status 3; the readable ones are still answered.
+  std::ofstream(dir / "empty.png");
+  auto partly = placedb({"query", map.string(), (dir / "empty.png").string(), list[30]}, dir);
+  EXPECT_EQ(partly.exit_code, 3) << describe(partly);
+  EXPECT_NE(partly.err.find("placedb: error: cannot read image"), std::string::npos) << partly.err;
+  EXPECT_NE(partly.out.find(list[30]), std::string::npos) << partly.out;
 }
 
 TEST(CliSyntheticSequence, SplitRunEqualsStraightRun) {
@@ -287,6 +318,31 @@ TEST(CliSyntheticSequence, InterruptClosesCleanlyAndResumes) {
   ASSERT_EQ(rest.exit_code, 0) << describe(rest);
   EXPECT_EQ(frameColumn(readCsv(log)), range(0, 59));
   EXPECT_EQ(info(fs::path(map), dir)["sessions"].size(), 1u);
+}
+
+TEST(CliSyntheticSequence, VideoSourceCountsFramesFromTheStart) {
+  auto seq = demoSequence();
+  auto dir = scratchDir("CliSynthetic_video");
+  auto video = (dir / "tour.avi").string();
+  {
+    cv::VideoWriter writer(video, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10,
+                           cv::Size(320, 240), false);
+    if (!writer.isOpened()) GTEST_SKIP() << "OpenCV cannot write MJPG video here";
+    for (int i = 0; i < 20; ++i) {
+      char name[32];
+      std::snprintf(name, sizeof name, "%06d.png", i);
+      writer.write(cv::imread((seq / "images" / name).string(), cv::IMREAD_GRAYSCALE));
+    }
+  }
+  auto map = (dir / "m.placedb").string(), log = (dir / "run.csv").string();
+  auto first = placedb({"map", map, video, "--log", log, "--stop-after", "8", "-q"}, dir);
+  ASSERT_EQ(first.exit_code, 0) << describe(first);
+  auto rest = placedb({"map", map, video, "--log", log, "-q"}, dir);
+  ASSERT_EQ(rest.exit_code, 0) << describe(rest);
+  EXPECT_EQ(frameColumn(readCsv(log)), range(0, 19));
+  auto about = info(fs::path(map), dir);
+  ASSERT_EQ(about["sessions"].size(), 1u);
+  EXPECT_EQ(about["sessions"][0]["frames"], 20);
 }
 
 TEST(CliDemo, MapsScoresAndPlotsWithoutOutsideData) {

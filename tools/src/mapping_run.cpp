@@ -40,6 +40,8 @@ std::optional<SessionInfo> sessionToResume(const Map& map, const ImageSource& so
 
 MappingSummary runMapping(const MappingRequest& request) {
   auto started = std::chrono::steady_clock::now();
+  // From here on Ctrl-C only raises a flag: the frame loop below acts on it.
+  installInterruptHandlers();
   // Everything that can be refused is checked before the map file is touched.
   auto source = ImageSource::open(request.source);
   Options options = resolveOptions(request.settings);
@@ -81,7 +83,6 @@ MappingSummary runMapping(const MappingRequest& request) {
   if (!request.quiet)
     progress = std::make_unique<ProgressReporter>(remaining, ProgressReporter::stderrIsTerminal());
 
-  installInterruptHandlers();
   SourceFrame frame;
   while (true) {
     if (interruptRequested()) {
