@@ -140,6 +140,15 @@ const std::vector<Row>& table() {
            "Gaussian spread of the prediction over neighbouring locations, in links"),
       integer("prediction_links", &Options::prediction_links, 0, 1000, "0..1000",
               "links from a location that its prediction reaches"),
+      integer("hypothesis_radius", &Options::hypothesis_radius, 0, 100, "0..100",
+              "WM locations within this many links of the filter's best hypothesis compete with "
+              "it in the geometric check (0 = the best hypothesis alone)"),
+      integer("hypothesis_top_similar", &Options::hypothesis_top_similar, 0, 1000, "0..1000",
+              "this many most similar WM locations also compete with the filter's best hypothesis"),
+      integer("geometry_min_inliers", &Options::geometry_min_inliers, 0, 10000, "0..10000",
+              "epipolar RANSAC inliers a loop-closure hypothesis needs; 0 = no geometric check"),
+      real("geometry_max_error_px", &Options::geometry_max_error_px, 0.1, 100, "0.1..100",
+           "RANSAC threshold: distance of a keypoint from its epipolar line, in pixels"),
   };
   return rows;
 }
@@ -199,6 +208,11 @@ Options Options::paperPreset() {
   o.t_nd2 = 0.08;
   o.t_time_ms = 700;
   o.decision_rule = "paper";
+  o.loop_ratio = 0.9;
+  // The papers verify nothing: their hypothesis is the filter's best location, as it stands.
+  o.hypothesis_radius = 0;
+  o.hypothesis_top_similar = 0;
+  o.geometry_min_inliers = 0;
   return o;
 }
 

@@ -1,0 +1,43 @@
+#pragma once
+// The engine's own counters and the vocabulary's index state, as kept in the map's engine_state
+// table so that a reopened map continues exactly where the last committed frame left it.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "placedb/storage/map_store.h"
+#include "vocabulary/vocabulary.h"
+
+namespace placedb {
+
+struct EngineCounters {
+  std::int64_t next_frame_id = 1;
+  std::int64_t next_location_id = 1;
+  std::int64_t feature_sum = 0;      // features over good frames: the bad-frame running mean
+  std::int64_t feature_frames = 0;
+  std::int64_t last_location = 0;    // newest location of the current session, 0 = none
+  std::int64_t last_session = 0;     // session that last_location belongs to
+  double previous_score = 0;         // the filter's ratio-test memory
+
+  void save(storage::MapStore& store) const;
+  // False when the map holds no engine state yet (a new map).
+  bool load(const storage::MapStore& store);
+};
+
+// The vocabulary's index state grows by an append-only split log; it is stored in chunks so that
+// a frame rewrites only the chunk it extended, not the whole log.
+class VocabularyStateWriter {
+ public:
+  static constexpr std::size_t kSplitsPerChunk = 1024;
+
+  // Writes what changed since the last save() or load().
+  void save(storage::MapStore& store, const vocab::IndexState& state);
+  // Empty optional when the map holds no vocabulary state.
+  std::optional<vocab::IndexState> load(const storage::MapStore& store);
+
+ private:
+  std::size_t saved_splits_ = 0;
+  std::int64_t saved_next_word_id_ = -1;
+};
+
+}  // namespace placedb

@@ -1,0 +1,37 @@
+#pragma once
+// Epipolar verification of a loop-closure hypothesis. The query image's features are matched to
+// the candidate location's keypoints by descriptor (the location keeps, per keypoint, the word it
+// was quantised to; the word's descriptor stands in for the keypoint's), with a ratio test, and
+// a RANSAC fundamental matrix counts how many matches one rigid scene explains. Look-alike
+// places share words too, but their matches scatter instead of agreeing on one geometry.
+//
+// Words alone pair too few keypoints: a true revisit of lip6_outdoor shares ~20 words out of 400
+// features, mostly not unique ones, while nearest-descriptor matching pairs several times more.
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace placedb {
+
+struct GeometricCheckSettings {
+  int min_inliers = 0;        // matches that must agree; 0 switches the check off
+  double max_error_px = 3.0;  // RANSAC distance from the epipolar line, pixels
+  double match_ratio = 0.8;   // nearest / second-nearest descriptor distance for a match
+};
+
+struct GeometricResult {
+  int matches = 0;  // descriptor matches passing the ratio test
+  int inliers = 0;  // of them, consistent with the best fundamental matrix
+};
+
+struct GeometricView {  // keypoints and one descriptor row per keypoint (CV_32F)
+  std::vector<cv::Point2f> points;
+  cv::Mat descriptors;
+};
+
+// Deterministic (OpenCV's RANSAC seeds its generator per call), so a resumed run repeats it.
+GeometricResult checkGeometry(const GeometricView& query, const GeometricView& candidate,
+                              const GeometricCheckSettings& settings);
+
+}  // namespace placedb

@@ -1,0 +1,281 @@
+// Opening a map: settings to component options, restoring RAM state from the file, sessions.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstring>
+#include <set>
+
+#include "engine/map_impl.h"
+#include "engine/option_mapping.h"
+#include "placedb/version.h"
+
+namespace placedb {
+namespace {
+
+constexpr const char* kMapExtractorKey = "map.extractor";
+
+}  // namespace
+
+std::unique_ptr<Map> Map::open(const std::string& path, const Options& options, Mode mode) {
+  options.validate();
+  return std::make_unique<MapImpl>(path, options, mode);
+}
+
+MapImpl::MapImpl(const std::string& path, const Options& options, Mode mode) : mode_(mode) {
+  store_ = std::make_unique<storage::MapStore>(
+      path, mode == Mode::kLocalisation ? storage::OpenMode::kReadOnly
+                                        : storage::OpenMode::kReadWrite);
+  configure(options);
+  restoreFromStore();
+}
+
+MapImpl::~MapImpl() {
+  try {
+    close();
+  } catch (...) {
+    // A destructor must not throw; the session simply stays marked as interrupted.
+  }
+}
+
+void MapImpl::configure(const Options& options) {
+  options.validate();
+  options_ = options;
+  extractor_ = makeFeatureExtractor(toFeatureOptions(options));
+  if (auto made_with = store_->getStateText(kMapExtractorKey);
+      made_with && *made_with != extractor_->signature())
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("{} was made with {} features; extractor={} gives {}: mixing them is "
+                            "refused (use a new map)",
+                            store_->path(), *made_with, options.extractor,
+                            extractor_->signature()));
+  auto vocabulary_options = toVocabularyOptions(options);
+  vocabulary_options.fixed = vocabulary_options.fixed || mode_ == Mode::kLocalisation;
+  vocabulary_ = std::make_unique<vocab::Vocabulary>(vocabulary_options, extractor_->dim(),
+                                                    extractor_->signature());
+  filter_ = std::make_unique<BayesFilter>(toFilterSettings(options));
+  tiers_ = std::make_unique<MemoryTiers>(toMemorySettings(options));
+  index_ = InvertedIndex();
+  graph_ = LinkGraph();
+  vocabulary_state_ = VocabularyStateWriter();
+}
+
+void MapImpl::restoreFromStore() {
+  counters_ = EngineCounters();
+  counters_.load(*store_);
+
+  // Tiers: age is the creation order, which location ids follow.
+  MemorySnapshot snapshot;
+  snapshot.next_age = counters_.next_location_id;
+  const std::pair<storage::Tier, Tier> tiers[] = {
+      {storage::Tier::kSTM, Tier::kStm}, {storage::Tier::kWM, Tier::kWm},
+      {storage::Tier::kLTM, Tier::kLtm}};
+  std::vector<std::int64_t> live;  // STM and WM
+  for (auto [stored, tier] : tiers) {
+    for (const auto& row : store_->locationsInTier(stored)) {
+      snapshot.locations.push_back({row.id, tier, row.weight, row.id});
+      if (tier == Tier::kStm) snapshot.stm.push_back(row.id);
+      if (tier != Tier::kLtm) live.push_back(row.id);
+    }
+  }
+  std::sort(snapshot.locations.begin(), snapshot.locations.end(),
+            [](const auto& a, const auto& b) { return a.id < b.id; });
+  std::sort(live.begin(), live.end());
+  tiers_->restore(snapshot);
+
+  // Signatures of STM and WM, and the words they reference.
+  std::set<std::int64_t> words;
+  auto refs = store_->loadWordRefs(live);
+  for (std::int64_t id : live) {
+    std::vector<WordId> ids;
+    for (const auto& r : refs[id]) ids.push_back(r.word_id);
+    words.insert(ids.begin(), ids.end());
+    index_.add(id, Signature::fromWords(std::move(ids)));
+  }
+  auto state = vocabulary_state_.load(*store_);
+  if (state && state->kd_trees != options_.kd_trees)
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("{} indexes its words with kd_trees={}; kd_trees={} is refused "
+                            "(the setting is fixed when a map is made)",
+                            store_->path(), state->kd_trees, options_.kd_trees));
+  if (state) {
+    std::vector<std::int64_t> word_ids(words.begin(), words.end());
+    auto records = store_->loadWords(word_ids);
+    if (records.size() != word_ids.size())
+      throw Error(ErrorCode::kMapRefused,
+                  fmt::format("{}: {} words referenced by working memory are missing",
+                              store_->path(), word_ids.size() - records.size()));
+    cv::Mat descriptors(static_cast<int>(records.size()), extractor_->dim(), CV_32F);
+    std::vector<std::int64_t> created(records.size());
+    for (std::size_t i = 0; i < records.size(); ++i) {
+      const auto& r = records[i];
+      if (r.dim != extractor_->dim() || r.type != storage::DescriptorKind::kFloat32)
+        throw Error(ErrorCode::kMapRefused,
+                    fmt::format("{}: word {} has dimension {}, the extractor gives {}",
+                                store_->path(), r.id, r.dim, extractor_->dim()));
+      std::memcpy(descriptors.ptr<float>(static_cast<int>(i)), r.descriptor.data(),
+                  r.descriptor.size());
+      created[i] = r.created_frame.value_or(-1);
+    }
+    try {
+      vocabulary_->restore(*state, word_ids, descriptors, created);
+    } catch (const Error& e) {
+      // The state came from the file: if it does not fit, the file is damaged, not the caller.
+      if (e.code() != ErrorCode::kInvalidArgument) throw;
+      throw Error(ErrorCode::kMapRefused, store_->path() + ": " + e.what());
+    }
+  } else if (!words.empty()) {
+    throw Error(ErrorCode::kMapRefused,
+                store_->path() + ": working memory has words but the vocabulary state is missing");
+  }
+
+  // Links among STM and WM locations.
+  std::set<std::int64_t> live_set(live.begin(), live.end());
+  for (std::int64_t id : live) {
+    graph_.addNode(id);
+    for (const auto& link : store_->links(id)) {
+      std::int64_t other = link.location_a == id ? link.location_b : link.location_a;
+      if (link.type != storage::LinkType::kMerge && live_set.count(other))
+        graph_.addLink(id, other);
+    }
+  }
+
+  FilterState filter_state;
+  filter_state.posterior = store_->loadPosterior();
+  filter_state.previous_score = counters_.previous_score;
+  filter_->restore(filter_state);
+}
+
+void MapImpl::requireWritable(const char* what) const {
+  if (mode_ == Mode::kLocalisation)
+    throw Error(ErrorCode::kReadOnly,
+                fmt::format("{}: {} needs the map opened for mapping, not localisation",
+                            store_->path(), what));
+  if (broken_)
+    throw Error(ErrorCode::kStorage,
+                fmt::format("{}: a previous frame failed to commit; reopen the map to resume",
+                            store_->path()));
+}
+
+void MapImpl::requireSession(const char* what) const {
+  requireWritable(what);
+  if (!session_id_)
+    throw Error(ErrorCode::kInternal,
+                fmt::format("{}: {} before beginSession() or resumeSession()", store_->path(), what));
+}
+
+SessionInfo MapImpl::toInfo(const storage::SessionRecord& record) const {
+  SessionInfo info;
+  info.id = record.id;
+  info.source = record.source;
+  info.started_at = record.started_at;
+  info.ended_at = record.ended_at.value_or("");
+  info.clean_close = record.clean_close;
+  info.frames = store_->frameCount(record.id);
+  info.last_source_index = store_->lastFrameIndex(record.id);
+  return info;
+}
+
+std::optional<SessionInfo> MapImpl::lastSession() const {
+  auto last = store_->lastSession();
+  if (!last) return std::nullopt;
+  return toInfo(*last);
+}
+
+std::vector<SessionInfo> MapImpl::sessions() const {
+  std::vector<SessionInfo> out;
+  for (const auto& s : store_->sessions()) out.push_back(toInfo(s));
+  return out;
+}
+
+std::map<std::string, std::string> MapImpl::sessionSettings(std::int64_t session_id) const {
+  return store_->settings(session_id);
+}
+
+SessionInfo MapImpl::beginSession(const std::string& source) {
+  requireWritable("beginSession");
+  if (session_id_) close();
+  closed_ = false;
+  // A new session's locations never merge with, nor link to, the previous session's newest one;
+  // the previous session's STM becomes loop candidates.
+  auto tx = store_->begin();
+  std::int64_t id = store_->beginSession(source, options_.toSettings(), PLACEDB_VERSION_STRING);
+  if (!store_->getStateText(kMapExtractorKey))
+    store_->putState(kMapExtractorKey, extractor_->signature());
+  std::vector<std::int64_t> stm(tiers_->stm().begin(), tiers_->stm().end());
+  if (!stm.empty()) {
+    MemorySnapshot snap = tiers_->snapshot();
+    for (auto& r : snap.locations)
+      if (r.tier == Tier::kStm) r.tier = Tier::kWm;
+    snap.stm.clear();
+    tiers_->restore(snap);
+    store_->setTier(stm, storage::Tier::kWM);
+  }
+  counters_.last_location = 0;
+  counters_.last_session = id;
+  counters_.save(*store_);
+  tx.commit();
+  session_id_ = id;
+  return toInfo(*store_->lastSession());
+}
+
+SessionInfo MapImpl::resumeSession(std::int64_t session_id) {
+  requireWritable("resumeSession");
+  if (session_id_) close();
+  closed_ = false;
+  auto last = store_->lastSession();
+  if (!last || last->id != session_id)
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("{}: only the last session can be resumed (asked {}, last is {})",
+                            store_->path(), session_id, last ? last->id : 0));
+  // The session continues with the settings it started with, so its results stay exact.
+  Options stored = Options::fromSettings(store_->settings(session_id));
+  if (stored.toSettings() != options_.toSettings()) {
+    configure(stored);
+    restoreFromStore();
+  }
+  store_->reopenSession(session_id);
+  session_id_ = session_id;
+  return toInfo(*store_->lastSession());
+}
+
+void MapImpl::close() {
+  if (closed_ || !session_id_ || broken_) {
+    closed_ = true;
+    return;
+  }
+  store_->endSession(*session_id_, true);
+  closed_ = true;
+  session_id_.reset();
+}
+
+}  // namespace placedb
+
+namespace placedb {
+
+std::string MapImpl::checkConsistency() const {
+  if (auto problem = tiers_->checkInvariants(); !problem.empty()) return problem;
+  std::set<std::int64_t> live(tiers_->stm().begin(), tiers_->stm().end());
+  for (std::int64_t id : tiers_->wm()) live.insert(id);
+  if (index_.locationCount() != live.size())
+    return fmt::format("inverted index holds {} locations, STM+WM {}", index_.locationCount(),
+                       live.size());
+  std::set<std::int64_t> words;
+  for (std::int64_t id : live) {
+    if (!index_.contains(id)) return fmt::format("location {} missing from the index", id);
+    for (const auto& e : index_.signatureOf(id).entries()) words.insert(e.word);
+  }
+  auto in_vocabulary = vocabulary_->ids();
+  if (std::vector<std::int64_t>(words.begin(), words.end()) != in_vocabulary)
+    return fmt::format("vocabulary holds {} words, STM+WM reference {}", in_vocabulary.size(),
+                       words.size());
+  // The file agrees with RAM on every tier.
+  for (std::int64_t id : live) {
+    auto stored = store_->location(id);
+    if (!stored) return fmt::format("location {} is not in the file", id);
+    auto expected = tiers_->tierOf(id) == Tier::kStm ? storage::Tier::kSTM : storage::Tier::kWM;
+    if (stored->tier != expected) return fmt::format("location {} has another tier on file", id);
+  }
+  return {};
+}
+
+}  // namespace placedb

@@ -1,0 +1,342 @@
+// One frame through the pipeline: features, quantisation, STM, likelihood, filter, memory
+// management, and one transaction that commits everything the frame changed.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <set>
+
+#include "engine/map_impl.h"
+#include "features/image_conversion.h"
+
+namespace placedb {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+storage::LinkRecord link(std::int64_t a, std::int64_t b, storage::LinkType type,
+                         std::optional<double> score = std::nullopt) {
+  return {std::min(a, b), std::max(a, b), type, score};
+}
+
+}  // namespace
+
+struct MapImpl::FrameWrite {
+  storage::FrameRecord frame;
+  std::optional<storage::LocationRecord> new_location;
+  std::vector<storage::WordRef> refs;  // the new location's signature
+  std::vector<storage::WordRecord> words;
+  std::vector<storage::LinkRecord> links;
+  std::optional<std::pair<std::int64_t, std::int64_t>> weight;  // location, new weight
+  std::vector<std::int64_t> to_wm, to_ltm;
+  std::optional<storage::HypothesisRecord> hypothesis;
+};
+
+FrameResult MapImpl::process(const cv::Mat& image, std::int64_t source_index,
+                             const std::string& source_path) {
+  requireSession("process");
+  const auto start = Clock::now();
+  cv::Mat grey;
+  try {
+    grey = toGrey8(image);
+  } catch (const Error& e) {
+    if (e.code() != ErrorCode::kInvalidArgument) throw;
+    StageTimes times;
+    times.features = times.total = msSince(start);
+    return recordBad(source_index, source_path, 0, times);  // empty or tiny: nothing to see
+  }
+  Features features = extractor_->extract(grey);
+  return processFeatures(features, source_index, source_path, msSince(start));
+}
+
+FrameResult MapImpl::recordUnreadable(std::int64_t source_index, const std::string& source_path) {
+  requireSession("recordUnreadable");
+  return recordBad(source_index, source_path, 0, StageTimes());
+}
+
+FrameResult MapImpl::recordBad(std::int64_t source_index, const std::string& source_path,
+                               std::size_t feature_count, const StageTimes& times) {
+  FrameResult r;
+  r.frame_id = counters_.next_frame_id++;
+  r.session_id = *session_id_;
+  r.source_index = source_index;
+  r.outcome = FrameOutcome::kBad;
+  r.feature_count = feature_count;
+  r.times = times;
+  r.hypothesis.rejected_reason = "bad frame";
+  FrameWrite w;
+  w.frame.id = r.frame_id;
+  w.frame.outcome = storage::FrameOutcome::kBad;
+  commit(w, r, source_path);
+  return r;
+}
+
+FrameResult MapImpl::processFeatures(const Features& features, std::int64_t source_index,
+                                     const std::string& source_path, double features_ms) {
+  const auto start = Clock::now() - std::chrono::duration_cast<Clock::duration>(
+                                        std::chrono::duration<double, std::milli>(features_ms));
+  auto stage = Clock::now();
+  StageTimes times;
+  times.features = features_ms;
+
+  const double mean_features =
+      counters_.feature_frames ? double(counters_.feature_sum) / counters_.feature_frames : 0.0;
+  if (features.size() == 0 || double(features.size()) < options_.bad_ratio * mean_features) {
+    times.total = msSince(start);
+    return recordBad(source_index, source_path, features.size(), times);
+  }
+  counters_.feature_sum += static_cast<std::int64_t>(features.size());
+  counters_.feature_frames += 1;
+
+  tiers_->beginFrame();
+  FrameResult r;
+  FrameWrite w;
+  r.frame_id = counters_.next_frame_id++;
+  r.session_id = *session_id_;
+  r.source_index = source_index;
+  r.feature_count = features.size();
+  w.frame.id = r.frame_id;
+
+  // Quantisation: every feature gets a word; new words enter the index at once.
+  vocab::Quantization q = vocabulary_->quantize(features.descriptors, r.frame_id);
+  for (std::int64_t id : q.created_words)
+    w.words.push_back(storage::WordRecord::fromFloats(id, r.frame_id, vocabulary_->descriptor(id),
+                                                      vocabulary_->dim()));
+  std::vector<WordId> word_ids;
+  word_ids.reserve(q.word_of_feature.size());
+  for (std::int64_t id : q.word_of_feature)
+    if (id >= 0) word_ids.push_back(id);
+  Signature signature = Signature::fromWords(word_ids);
+  r.words_created = q.created_words.size();
+  r.mean_quantisation_error = q.mean_error;
+  times.quantisation = msSince(stage);
+
+  // Short-term memory: merge into the newest location when similar enough, else a new location.
+  std::int64_t previous = counters_.last_session == *session_id_ ? counters_.last_location : 0;
+  bool previous_live =
+      previous && tiers_->contains(previous) && tiers_->tierOf(previous) != Tier::kLtm;
+  if (previous_live && tiers_->tierOf(previous) == Tier::kStm &&
+      similarity(signature, index_.signatureOf(previous)) > options_.t_sim) {
+    r.outcome = FrameOutcome::kMerged;
+    r.location_id = previous;
+    tiers_->addWeight(previous, 1);
+    w.weight = {previous, tiers_->weightOf(previous)};
+    // The merged frame's own new words are referenced by no location: they leave the index.
+    vocabulary_->erase(q.created_words);
+  } else {
+    r.outcome = FrameOutcome::kNewLocation;
+    r.location_id = counters_.next_location_id++;
+    index_.add(r.location_id, signature);
+    graph_.addNode(r.location_id);
+    if (previous_live) {
+      graph_.addLink(previous, r.location_id);
+      w.links.push_back(link(previous, r.location_id, storage::LinkType::kNeighbour));
+    }
+    w.new_location =
+        storage::LocationRecord{r.location_id, *session_id_, 0, storage::Tier::kSTM, r.frame_id};
+    w.refs.reserve(features.size());
+    for (std::size_t i = 0; i < features.size(); ++i) {
+      if (q.word_of_feature[i] < 0) continue;
+      const Keypoint& k = features.keypoints[i];
+      w.refs.push_back({q.word_of_feature[i], k.x, k.y, k.size, k.angle, k.response});
+    }
+    enterWorkingMemory(tiers_->push(r.location_id), w);
+    counters_.last_location = r.location_id;
+    counters_.last_session = *session_id_;
+  }
+  w.frame.outcome = r.outcome == FrameOutcome::kMerged ? storage::FrameOutcome::kMerged
+                                                       : storage::FrameOutcome::kNewLocation;
+  w.frame.location_id = r.location_id;
+
+  // Likelihood over working memory, through the inverted index.
+  stage = Clock::now();
+  auto similarities = index_.similarities(
+      signature, [this](LocationId id) { return tiers_->tierOf(id) == Tier::kWm; });
+  times.likelihood = msSince(stage);
+
+  // Bayes filter, the choice among its best location's neighbours, the geometric check.
+  stage = Clock::now();
+  FilterOutcome outcome = filter_->update(tiers_->wm(), similarities, graph_);
+  counters_.previous_score = filter_->state().previous_score;
+  const Verified verified = verifyHypothesis(outcome, features, similarities);
+  const std::int64_t hypothesis = verified.location;
+  const bool has_hypothesis = hypothesis != kNewPlace;
+  std::string reason;
+  if (has_hypothesis) {
+    r.hypothesis.location_id = hypothesis;
+    r.hypothesis.posterior = filter_->posteriorOf(hypothesis);
+    r.hypothesis.accepted = outcome.accepted && verified.passed;
+    // EVALUATION.md: the score is 0 where a check other than the final threshold rejected it.
+    const bool vetoed = !verified.passed || outcome.reason == RejectReason::kRatioTest;
+    r.hypothesis.score = vetoed ? 0.0 : outcome.score;
+    if (r.hypothesis.accepted && hypothesis != r.location_id) {
+      w.links.push_back(
+          link(r.location_id, hypothesis, storage::LinkType::kLoopClosure, r.hypothesis.score));
+      graph_.addLink(r.location_id, hypothesis);
+    }
+    if (!r.hypothesis.accepted) reason = verified.passed ? toString(outcome.reason) : "geometry";
+  } else {
+    reason = toString(outcome.reason);
+  }
+  r.hypothesis.rejected_reason = reason;
+  w.hypothesis = storage::HypothesisRecord{
+      r.frame_id,
+      has_hypothesis ? std::optional<std::int64_t>(hypothesis) : std::nullopt,
+      r.hypothesis.posterior,
+      r.hypothesis.score,
+      r.hypothesis.accepted,
+      reason};
+  times.filter = msSince(stage);
+
+  // Memory management: bring back the hypothesis' LTM neighbours, then bound WM.
+  stage = Clock::now();
+  if (has_hypothesis) retrieveNeighbours(hypothesis, w, r);
+  transferToLtm(hypothesis, msSince(start) / 1000.0, w, r);
+  times.memory = msSince(stage);
+
+  r.times = times;
+  commit(w, r, source_path);
+  if (has_hypothesis) r.hypothesis.frames = framesOf(hypothesis);
+  return r;
+}
+
+void MapImpl::enterWorkingMemory(const std::vector<std::int64_t>& ids, FrameWrite& write) {
+  write.to_wm.insert(write.to_wm.end(), ids.begin(), ids.end());
+}
+
+void MapImpl::retrieveNeighbours(std::int64_t hypothesis, FrameWrite& write, FrameResult& result) {
+  if (options_.max_retrieved <= 0 || tiers_->ltmSize() == 0) return;
+  // Nearest first: the hypothesis' own LTM links, then those of its live neighbours.
+  std::vector<std::int64_t> candidates = store_->linkedInTier(hypothesis, storage::Tier::kLTM);
+  for (std::int64_t n : graph_.neighbours(hypothesis)) {
+    if (candidates.size() >= static_cast<std::size_t>(options_.max_retrieved)) break;
+    auto more = store_->linkedInTier(n, storage::Tier::kLTM);
+    candidates.insert(candidates.end(), more.begin(), more.end());
+  }
+  std::vector<std::int64_t> ids = tiers_->retrievalCandidates(hypothesis, candidates);
+  if (ids.empty()) return;
+
+  auto refs = store_->loadWordRefs(ids);
+  std::vector<std::int64_t> missing;
+  for (std::int64_t id : ids) {
+    std::vector<WordId> words;
+    words.reserve(refs[id].size());
+    for (const auto& ref : refs[id]) words.push_back(ref.word_id);
+    for (WordId word : index_.add(id, Signature::fromWords(std::move(words))).referenced)
+      if (!vocabulary_->contains(word)) missing.push_back(word);
+  }
+  std::sort(missing.begin(), missing.end());
+  if (!missing.empty()) {
+    auto records = store_->loadWords(missing);
+    cv::Mat descriptors(static_cast<int>(records.size()), vocabulary_->dim(), CV_32F);
+    std::vector<std::int64_t> ids_loaded, created;
+    for (std::size_t i = 0; i < records.size(); ++i) {
+      auto values = records[i].floats();
+      std::copy(values.begin(), values.end(), descriptors.ptr<float>(static_cast<int>(i)));
+      ids_loaded.push_back(records[i].id);
+      created.push_back(records[i].created_frame.value_or(-1));
+    }
+    vocabulary_->insert(ids_loaded, descriptors, created);
+  }
+  for (std::int64_t id : ids) {
+    graph_.addNode(id);
+    for (const auto& l : store_->links(id)) {
+      std::int64_t other = l.location_a == id ? l.location_b : l.location_a;
+      if (l.type != storage::LinkType::kMerge && graph_.hasNode(other)) graph_.addLink(id, other);
+    }
+  }
+  tiers_->retrieveToWm(ids);
+  write.to_wm.insert(write.to_wm.end(), ids.begin(), ids.end());
+  result.retrieved = ids.size();
+}
+
+void MapImpl::transferToLtm(std::int64_t hypothesis, double frame_seconds, FrameWrite& write,
+                            FrameResult& result) {
+  std::size_t planned = tiers_->plannedTransfers(frame_seconds);
+  if (planned == 0) return;
+  std::set<std::int64_t> immune;
+  if (hypothesis != kNewPlace) {
+    immune.insert(hypothesis);
+    for (std::int64_t n : graph_.neighbours(hypothesis)) immune.insert(n);
+  }
+  std::vector<std::int64_t> ids = tiers_->transferCandidates(planned, immune);
+  for (std::int64_t id : ids) {
+    leaveIndex(index_.remove(id));
+    graph_.removeNode(id);
+  }
+  tiers_->transferToLtm(ids);
+  write.to_ltm.insert(write.to_ltm.end(), ids.begin(), ids.end());
+  result.transferred = ids.size();
+}
+
+void MapImpl::leaveIndex(const WordChanges& changes) {
+  if (!changes.unreferenced.empty()) vocabulary_->erase(changes.unreferenced);
+}
+
+void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_path) {
+  const auto stage = Clock::now();
+  r.vocabulary_size = vocabulary_->size();
+  r.stm_size = tiers_->stm().size();
+  r.wm_size = tiers_->wmSize();
+
+  w.frame.session_id = r.session_id;
+  w.frame.source_index = r.source_index;
+  w.frame.source_path = source_path;
+  w.frame.stats = {
+      static_cast<std::int64_t>(r.feature_count),   static_cast<std::int64_t>(r.words_created),
+      static_cast<std::int64_t>(r.vocabulary_size), static_cast<std::int64_t>(r.wm_size),
+      static_cast<std::int64_t>(r.stm_size),        r.mean_quantisation_error};
+  try {
+    auto tx = store_->begin();
+    const auto& t = r.times;
+    // The row's storage and total times stop here: the commit below cannot time itself.
+    w.frame.timings = {t.features,
+                       t.quantisation,
+                       t.likelihood,
+                       t.filter,
+                       t.memory,
+                       0,
+                       t.features + t.quantisation + t.likelihood + t.filter + t.memory};
+    store_->insertFrame(w.frame);
+    if (!w.words.empty()) store_->insertWords(w.words);
+    if (w.new_location) {
+      store_->insertLocation(*w.new_location);
+      store_->insertWordRefs(w.new_location->id, w.refs);
+    }
+    if (w.frame.location_id) store_->addCoveredFrame(*w.frame.location_id, r.frame_id);
+    if (w.weight) store_->updateWeight(w.weight->first, w.weight->second);
+    for (const auto& l : w.links) store_->insertLink(l.location_a, l.location_b, l.type, l.score);
+    if (!w.to_wm.empty()) store_->setTier(w.to_wm, storage::Tier::kWM);
+    if (!w.to_ltm.empty()) store_->setTier(w.to_ltm, storage::Tier::kLTM);
+    if (w.hypothesis) store_->insertHypothesis(*w.hypothesis);
+    if (w.frame.outcome != storage::FrameOutcome::kBad)
+      store_->putPosterior(filter_->state().posterior);
+    counters_.save(*store_);
+    vocabulary_state_.save(*store_, vocabulary_->state());
+    tx.commit();
+  } catch (...) {
+    broken_ = true;  // RAM is one frame ahead of the file now
+    throw;
+  }
+  r.times.storage = msSince(stage);
+  r.times.total = r.times.features + r.times.quantisation + r.times.likelihood + r.times.filter +
+                  r.times.memory + r.times.storage;
+}
+
+std::vector<FrameRef> MapImpl::framesOf(std::int64_t location_id) const {
+  std::vector<FrameRef> out;
+  for (std::int64_t frame_id : store_->coveredFrames(location_id)) {
+    auto f = store_->frame(frame_id);
+    if (!f) continue;
+    out.push_back({f->id, f->session_id, f->source_index, f->source_path});
+  }
+  std::sort(out.begin(), out.end(),
+            [](const FrameRef& a, const FrameRef& b) { return a.frame_id < b.frame_id; });
+  return out;
+}
+
+}  // namespace placedb

@@ -1,0 +1,59 @@
+#include "engine/option_mapping.h"
+
+namespace placedb {
+
+FeatureOptions toFeatureOptions(const Options& o) {
+  FeatureOptions f;
+  f.extractor = o.extractor;
+  f.hessian_threshold = o.hessian_threshold;
+  f.octaves = o.octaves;
+  f.intervals = o.intervals;
+  f.upright = o.upright;
+  f.max_features = o.max_features;
+  f.min_response = static_cast<float>(o.min_response);
+  f.threads = 1;  // the engine's threads go to the pipeline, and results never depend on them
+  return f;
+}
+
+vocab::VocabularyOptions toVocabularyOptions(const Options& o) {
+  vocab::VocabularyOptions v;
+  v.rule = o.word_rule == "nndr" ? vocab::WordRule::kNndr : vocab::WordRule::kGreedy;
+  v.unit = o.distance_unit == "euclidean" ? vocab::DistanceUnit::kEuclidean
+                                          : vocab::DistanceUnit::kSquared;
+  v.t_nndr = static_cast<float>(o.t_nndr);
+  v.t_nd1 = static_cast<float>(o.t_nd1);
+  v.t_nd2 = static_cast<float>(o.t_nd2);
+  v.kd_trees = o.kd_trees;
+  v.checks = o.kd_checks;
+  return v;
+}
+
+BayesFilterSettings toFilterSettings(const Options& o) {
+  BayesFilterSettings s;
+  s.gaussian_sigma = o.prediction_sigma;
+  s.neighbourhood_links = o.prediction_links;
+  s.rule = o.decision_rule == "paper" ? DecisionRule::kPaper000 : DecisionRule::kRtabmap;
+  s.loop_threshold = o.t_loop;
+  s.loop_ratio = o.loop_ratio;
+  return s;
+}
+
+MemorySettings toMemorySettings(const Options& o) {
+  MemorySettings m;
+  m.stm_size = o.stm_size;
+  m.wm_max = o.wm_max;
+  m.time_limit_s = o.t_time_ms / 1000.0;
+  m.immune_newest_count = o.wm_immune_newest;
+  m.immune_newest_ratio = o.wm_recent_ratio;
+  m.max_retrieved = o.max_retrieved;
+  return m;
+}
+
+GeometricCheckSettings toGeometricCheckSettings(const Options& o) {
+  GeometricCheckSettings g;
+  g.min_inliers = o.geometry_min_inliers;
+  g.max_error_px = o.geometry_max_error_px;
+  return g;
+}
+
+}  // namespace placedb

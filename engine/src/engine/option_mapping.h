@@ -1,0 +1,18 @@
+#pragma once
+// From the public Options to each component's own settings struct.
+#include "engine/geometric_check.h"
+#include "features/feature_options.h"
+#include "filter/filter_settings.h"
+#include "memory/memory_tiers.h"
+#include "placedb/options.h"
+#include "vocabulary/vocabulary.h"
+
+namespace placedb {
+
+FeatureOptions toFeatureOptions(const Options& options);
+vocab::VocabularyOptions toVocabularyOptions(const Options& options);
+BayesFilterSettings toFilterSettings(const Options& options);
+MemorySettings toMemorySettings(const Options& options);
+GeometricCheckSettings toGeometricCheckSettings(const Options& options);
+
+}  // namespace placedb
