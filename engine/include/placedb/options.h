@@ -51,6 +51,7 @@ struct Options {
   int hypothesis_top_similar = 5;      // ... and so do this many most similar WM locations
   int geometry_min_inliers = 15;       // epipolar RANSAC inliers a hypothesis needs, 0 = no check
   double geometry_max_error_px = 3.0;  // RANSAC distance to the epipolar line, pixels
+  double geometry_match_ratio = 0.8;   // descriptor ratio test for the check's matches
 
   // Throws placedb::Error(kInvalidArgument) naming the key and the valid values or range;
   // an unknown key is refused with the list of known ones.

@@ -149,6 +149,8 @@ const std::vector<Row>& table() {
               "epipolar RANSAC inliers a loop-closure hypothesis needs; 0 = no geometric check"),
       real("geometry_max_error_px", &Options::geometry_max_error_px, 0.1, 100, "0.1..100",
            "RANSAC threshold: distance of a keypoint from its epipolar line, in pixels"),
+      real("geometry_match_ratio", &Options::geometry_match_ratio, 0.1, 1, "0.1..1",
+           "geometric check: nearest/second-nearest descriptor distance ratio for a match"),
   };
   return rows;
 }

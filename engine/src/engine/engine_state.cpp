@@ -34,9 +34,9 @@ T get(const std::uint8_t* at) {
 }  // namespace
 
 void EngineCounters::save(storage::MapStore& store) const {
-  nlohmann::json j = {{"next_frame_id", next_frame_id},   {"next_location_id", next_location_id},
-                      {"feature_sum", feature_sum},       {"feature_frames", feature_frames},
-                      {"last_location", last_location},   {"last_session", last_session},
+  nlohmann::json j = {{"next_frame_id", next_frame_id},  {"next_location_id", next_location_id},
+                      {"feature_sum", feature_sum},      {"feature_frames", feature_frames},
+                      {"last_location", last_location},  {"last_session", last_session},
                       {"previous_score", previous_score}};
   store.putState(kCountersKey, j.dump());
 }
@@ -54,9 +54,8 @@ bool EngineCounters::load(const storage::MapStore& store) {
     last_session = j.at("last_session").get<std::int64_t>();
     previous_score = j.at("previous_score").get<double>();
   } catch (const nlohmann::json::exception& e) {
-    throw Error(ErrorCode::kMapRefused,
-                fmt::format("{}: engine state '{}' is damaged: {}", store.path(), kCountersKey,
-                            e.what()));
+    throw Error(ErrorCode::kMapRefused, fmt::format("{}: engine state '{}' is damaged: {}",
+                                                    store.path(), kCountersKey, e.what()));
   }
   return true;
 }

@@ -13,11 +13,11 @@ namespace placedb {
 struct EngineCounters {
   std::int64_t next_frame_id = 1;
   std::int64_t next_location_id = 1;
-  std::int64_t feature_sum = 0;      // features over good frames: the bad-frame running mean
+  std::int64_t feature_sum = 0;  // features over good frames: the bad-frame running mean
   std::int64_t feature_frames = 0;
-  std::int64_t last_location = 0;    // newest location of the current session, 0 = none
-  std::int64_t last_session = 0;     // session that last_location belongs to
-  double previous_score = 0;         // the filter's ratio-test memory
+  std::int64_t last_location = 0;  // newest location of the current session, 0 = none
+  std::int64_t last_session = 0;   // session that last_location belongs to
+  double previous_score = 0;       // the filter's ratio-test memory
 
   void save(storage::MapStore& store) const;
   // False when the map holds no engine state yet (a new map).

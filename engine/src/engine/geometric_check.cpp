@@ -34,7 +34,7 @@ GeometricResult checkGeometry(const GeometricView& query, const GeometricView& c
     b.push_back(candidate.points[static_cast<std::size_t>(kept[k].trainIdx)]);
   }
   result.matches = static_cast<int>(a.size());
-  if (result.matches < std::max(kMinimalPairs, settings.min_inliers)) return result;
+  if (result.matches < kMinimalPairs) return result;
   std::vector<unsigned char> mask;
   cv::Mat f = cv::findFundamentalMat(a, b, cv::FM_RANSAC, settings.max_error_px, 0.99, mask);
   if (f.empty()) return result;

@@ -62,6 +62,7 @@ class MapImpl final : public Map {
     std::int64_t location = 0;  // kNewPlace (-1) when there is none
     bool passed = false;        // the geometric check (or no check) let it through
     int inliers = 0;
+    int matches = 0;  // descriptor matches behind the inliers
   };
   Verified verifyHypothesis(const FilterOutcome& outcome, const Features& features,
                             const std::vector<LocationSimilarity>& similarities);

@@ -22,9 +22,9 @@ std::unique_ptr<Map> Map::open(const std::string& path, const Options& options, 
 }
 
 MapImpl::MapImpl(const std::string& path, const Options& options, Mode mode) : mode_(mode) {
-  store_ = std::make_unique<storage::MapStore>(
-      path, mode == Mode::kLocalisation ? storage::OpenMode::kReadOnly
-                                        : storage::OpenMode::kReadWrite);
+  store_ = std::make_unique<storage::MapStore>(path, mode == Mode::kLocalisation
+                                                         ? storage::OpenMode::kReadOnly
+                                                         : storage::OpenMode::kReadWrite);
   configure(options);
   restoreFromStore();
 }
@@ -43,11 +43,11 @@ void MapImpl::configure(const Options& options) {
   extractor_ = makeFeatureExtractor(toFeatureOptions(options));
   if (auto made_with = store_->getStateText(kMapExtractorKey);
       made_with && *made_with != extractor_->signature())
-    throw Error(ErrorCode::kInvalidArgument,
-                fmt::format("{} was made with {} features; extractor={} gives {}: mixing them is "
-                            "refused (use a new map)",
-                            store_->path(), *made_with, options.extractor,
-                            extractor_->signature()));
+    throw Error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("{} was made with {} features; extractor={} gives {}: mixing them is "
+                    "refused (use a new map)",
+                    store_->path(), *made_with, options.extractor, extractor_->signature()));
   auto vocabulary_options = toVocabularyOptions(options);
   vocabulary_options.fixed = vocabulary_options.fixed || mode_ == Mode::kLocalisation;
   vocabulary_ = std::make_unique<vocab::Vocabulary>(vocabulary_options, extractor_->dim(),
@@ -66,9 +66,9 @@ void MapImpl::restoreFromStore() {
   // Tiers: age is the creation order, which location ids follow.
   MemorySnapshot snapshot;
   snapshot.next_age = counters_.next_location_id;
-  const std::pair<storage::Tier, Tier> tiers[] = {
-      {storage::Tier::kSTM, Tier::kStm}, {storage::Tier::kWM, Tier::kWm},
-      {storage::Tier::kLTM, Tier::kLtm}};
+  const std::pair<storage::Tier, Tier> tiers[] = {{storage::Tier::kSTM, Tier::kStm},
+                                                  {storage::Tier::kWM, Tier::kWm},
+                                                  {storage::Tier::kLTM, Tier::kLtm}};
   std::vector<std::int64_t> live;  // STM and WM
   for (auto [stored, tier] : tiers) {
     for (const auto& row : store_->locationsInTier(stored)) {
@@ -159,8 +159,8 @@ void MapImpl::requireWritable(const char* what) const {
 void MapImpl::requireSession(const char* what) const {
   requireWritable(what);
   if (!session_id_)
-    throw Error(ErrorCode::kInternal,
-                fmt::format("{}: {} before beginSession() or resumeSession()", store_->path(), what));
+    throw Error(ErrorCode::kInternal, fmt::format("{}: {} before beginSession() or resumeSession()",
+                                                  store_->path(), what));
 }
 
 SessionInfo MapImpl::toInfo(const storage::SessionRecord& record) const {

@@ -178,7 +178,12 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
           link(r.location_id, hypothesis, storage::LinkType::kLoopClosure, r.hypothesis.score));
       graph_.addLink(r.location_id, hypothesis);
     }
-    if (!r.hypothesis.accepted) reason = verified.passed ? toString(outcome.reason) : "geometry";
+    if (!r.hypothesis.accepted) {
+      reason = verified.passed
+                   ? std::string(toString(outcome.reason))
+                   : fmt::format("geometry: {} inliers of {} matches, {} needed", verified.inliers,
+                                 verified.matches, options_.geometry_min_inliers);
+    }
   } else {
     reason = toString(outcome.reason);
   }

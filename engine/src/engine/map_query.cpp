@@ -26,11 +26,11 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
 
   // Every location held in RAM (STM and WM) is a candidate.
   auto sims = index_.similarities(signature);
-  std::stable_sort(sims.begin(), sims.end(), [](const auto& a, const auto& b) {
-    return a.similarity > b.similarity;
-  });
+  std::stable_sort(sims.begin(), sims.end(),
+                   [](const auto& a, const auto& b) { return a.similarity > b.similarity; });
   if (sims.size() > top_k) sims.resize(top_k);
-  for (const auto& s : sims) result.matches.push_back({s.location, s.similarity, framesOf(s.location)});
+  for (const auto& s : sims)
+    result.matches.push_back({s.location, s.similarity, framesOf(s.location)});
   result.time_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return result;

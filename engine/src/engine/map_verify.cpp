@@ -96,6 +96,7 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
     if (g.inliers > best) {
       best = g.inliers;
       v.location = c;
+      v.matches = g.matches;
     }
   }
   v.inliers = std::max(best, 0);

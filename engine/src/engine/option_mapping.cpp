@@ -53,6 +53,7 @@ GeometricCheckSettings toGeometricCheckSettings(const Options& o) {
   GeometricCheckSettings g;
   g.min_inliers = o.geometry_min_inliers;
   g.max_error_px = o.geometry_max_error_px;
+  g.match_ratio = o.geometry_match_ratio;
   return g;
 }
 
