@@ -64,8 +64,10 @@ TEST(Concurrency, SecondWriterIsRefusedWhileReadersWorkOnBothSides) {
   int reads = 0;
   while (reads < 8) {
     int status = 0;
-    const std::string out = shellOutput(
-        "sqlite3 -readonly '" + map.string() + "' 'select count(*) from frames' 2>&1", status);
+    const std::string out =
+        shellOutput(std::string("sqlite3 ") + (reads % 2 ? "-readonly " : "") + "'" + map.string() +
+                        "' 'select count(*) from frames' 2>&1",
+                    status);
     ASSERT_EQ(status, 0) << out;
     const std::int64_t count = std::stoll(out);
     EXPECT_GE(count, seen) << "a reader saw committed frames disappear";
@@ -74,6 +76,9 @@ TEST(Concurrency, SecondWriterIsRefusedWhileReadersWorkOnBothSides) {
   }
   auto reader = Map::open(map.string(), crashMapOptions(), Map::Mode::kLocalisation);
   EXPECT_GE(reader->lastSession()->frames, seen);
+  synthetic::SyntheticSequence sequence(crashSequenceOptions(30));
+  const QueryResult found = reader->query(sequence.render(0), 3);
+  ASSERT_FALSE(found.matches.empty()) << "localisation beside a running writer";
   reader.reset();
 
   auto done = readUntil(writer, "done");
