@@ -11,11 +11,11 @@ namespace placedb {
 struct Options {
   // --- features (SPEC §1) ---
   std::string extractor = "surf";      // surf | sift | kaze
-  double hessian_threshold = 150;      // SURF fast-Hessian threshold
+  double hessian_threshold = 60;       // SURF fast-Hessian threshold (150 before bench/quality)
   int octaves = 4;                     // SURF octaves
   int intervals = 2;                   // SURF intervals (layers) per octave
   bool upright = false;                // U-SURF: no orientation
-  int max_features = 400;              // strongest kept; 0 keeps all
+  int max_features = 600;              // strongest kept; 0 keeps all
   double min_response = 0;             // features under this response are dropped
   double bad_ratio = 0.25;             // fewer features than this x running mean: a bad frame
 
@@ -29,7 +29,7 @@ struct Options {
   int kd_checks = 64;
 
   // --- memory (SPEC §5, §7) ---
-  int stm_size = 10;                   // newest locations that are never loop candidates
+  int stm_size = 20;                   // newest locations that are never loop candidates
   double t_sim = 0.2;                  // merge into the previous location above this similarity
   int wm_max = 0;                      // WM size limit, 0 = unbounded
   double t_time_ms = 0;                // frame-time limit that triggers transfer, 0 = off
@@ -49,7 +49,7 @@ struct Options {
   int hypothesis_radius = 3;           // WM locations this many links from the filter's best
                                        // hypothesis compete with it; the check picks among them
   int hypothesis_top_similar = 5;      // ... and so do this many most similar WM locations
-  int geometry_min_inliers = 15;       // epipolar RANSAC inliers a hypothesis needs, 0 = no check
+  int geometry_min_inliers = 13;       // epipolar RANSAC inliers a hypothesis needs, 0 = no check
   double geometry_max_error_px = 3.0;  // RANSAC distance to the epipolar line, pixels
   double geometry_match_ratio = 0.8;   // descriptor ratio test for the check's matches
 
