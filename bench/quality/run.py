@@ -60,7 +60,7 @@ def main():
             print(f'missing {what}: {path}', file=sys.stderr)
             return 2
     os.makedirs(a.out, exist_ok=True)
-    print('| sequence | rule | R@100P w0 | R@100P w10 | accepted (true/false) | acc. precision '
+    print('| sequence | rule | R@100P w0 | R@100P w10 | accepted (true/false) | acc. precision w10 '
           '| acc. recall w0 | acc. recall w10 | vocabulary | mean q. error | ms mean / p99 / max '
           '| peak RSS MB |')
     print('|' + '---|' * 12)
