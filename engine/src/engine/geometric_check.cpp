@@ -1,6 +1,8 @@
 #include "engine/geometric_check.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
 
@@ -11,6 +13,41 @@ namespace {
 constexpr int kMinimalPairs = 8;
 
 }  // namespace
+
+std::vector<std::uint8_t> encodeDescriptors(const cv::Mat& descriptors) {
+  const int dim = descriptors.cols;
+  std::vector<std::uint8_t> out;
+  out.reserve(static_cast<std::size_t>(descriptors.rows) * (sizeof(float) + dim));
+  for (int r = 0; r < descriptors.rows; ++r) {
+    const float* row = descriptors.ptr<float>(r);
+    float scale = 0.f;
+    for (int c = 0; c < dim; ++c) scale = std::max(scale, std::abs(row[c]));
+    std::uint8_t scale_bytes[sizeof(float)];
+    std::memcpy(scale_bytes, &scale, sizeof(float));
+    out.insert(out.end(), scale_bytes, scale_bytes + sizeof(float));
+    for (int c = 0; c < dim; ++c) {
+      const float v = scale > 0.f ? std::round(row[c] / scale * 127.f) : 0.f;
+      out.push_back(static_cast<std::uint8_t>(static_cast<std::int8_t>(v)));
+    }
+  }
+  return out;
+}
+
+cv::Mat decodeDescriptors(const std::vector<std::uint8_t>& bytes, int dim) {
+  const std::size_t row_bytes = sizeof(float) + static_cast<std::size_t>(dim);
+  if (dim <= 0 || bytes.size() % row_bytes != 0) return cv::Mat();
+  const int rows = static_cast<int>(bytes.size() / row_bytes);
+  cv::Mat out(rows, dim, CV_32F);
+  for (int r = 0; r < rows; ++r) {
+    const std::uint8_t* in = bytes.data() + static_cast<std::size_t>(r) * row_bytes;
+    float scale = 0.f;
+    std::memcpy(&scale, in, sizeof(float));
+    float* row = out.ptr<float>(r);
+    for (int c = 0; c < dim; ++c)
+      row[c] = static_cast<float>(static_cast<std::int8_t>(in[sizeof(float) + c])) * scale / 127.f;
+  }
+  return out;
+}
 
 GeometricResult checkGeometry(const GeometricView& query, const GeometricView& candidate,
                               const GeometricCheckSettings& settings) {

@@ -30,6 +30,12 @@ struct GeometricView {  // keypoints and one descriptor row per keypoint (CV_32F
   cv::Mat descriptors;
 };
 
+// A location's own keypoint descriptors, kept for the check at one byte per value: each row
+// stores its largest magnitude as a float, then every value as a signed byte of that scale.
+// The check always uses the decoded values, so a resumed run sees exactly what a straight one did.
+std::vector<std::uint8_t> encodeDescriptors(const cv::Mat& descriptors);     // CV_32F rows
+cv::Mat decodeDescriptors(const std::vector<std::uint8_t>& bytes, int dim);  // empty if malformed
+
 // Deterministic (OpenCV's RANSAC seeds its generator per call), so a resumed run repeats it.
 GeometricResult checkGeometry(const GeometricView& query, const GeometricView& candidate,
                               const GeometricCheckSettings& settings);

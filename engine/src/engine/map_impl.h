@@ -20,6 +20,9 @@
 
 namespace placedb {
 
+// Engine-state key of a location's own keypoint descriptors (see encodeDescriptors).
+std::string keypointDescriptorsKey(std::int64_t location_id);
+
 class MapImpl final : public Map {
  public:
   MapImpl(const std::string& path, const Options& options, Mode mode);
@@ -66,7 +69,7 @@ class MapImpl final : public Map {
   };
   Verified verifyHypothesis(const FilterOutcome& outcome, const Features& features,
                             const std::vector<LocationSimilarity>& similarities);
-  GeometricView viewOf(const std::vector<storage::WordRef>& refs) const;
+  GeometricView viewOf(std::int64_t location_id, const std::vector<storage::WordRef>& refs) const;
   void retrieveNeighbours(std::int64_t hypothesis, FrameWrite& write, FrameResult& result);
   void transferToLtm(std::int64_t hypothesis, double frame_seconds, FrameWrite& write,
                      FrameResult& result);

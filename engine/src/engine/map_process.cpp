@@ -28,7 +28,8 @@ storage::LinkRecord link(std::int64_t a, std::int64_t b, storage::LinkType type,
 struct MapImpl::FrameWrite {
   storage::FrameRecord frame;
   std::optional<storage::LocationRecord> new_location;
-  std::vector<storage::WordRef> refs;  // the new location's signature
+  std::vector<storage::WordRef> refs;              // the new location's signature
+  std::vector<std::uint8_t> keypoint_descriptors;  // the same keypoints' own descriptors
   std::vector<storage::WordRecord> words;
   std::vector<storage::LinkRecord> links;
   std::optional<std::pair<std::int64_t, std::int64_t>> weight;  // location, new weight
@@ -139,11 +140,15 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
     w.new_location =
         storage::LocationRecord{r.location_id, *session_id_, 0, storage::Tier::kSTM, r.frame_id};
     w.refs.reserve(features.size());
+    cv::Mat kept;
     for (std::size_t i = 0; i < features.size(); ++i) {
       if (q.word_of_feature[i] < 0) continue;
       const Keypoint& k = features.keypoints[i];
       w.refs.push_back({q.word_of_feature[i], k.x, k.y, k.size, k.angle, k.response});
+      kept.push_back(features.descriptors.row(static_cast<int>(i)));
     }
+    if (options_.geometry_min_inliers > 0 && features.descriptors.type() == CV_32F)
+      w.keypoint_descriptors = encodeDescriptors(kept);
     enterWorkingMemory(tiers_->push(r.location_id), w);
     counters_.last_location = r.location_id;
     counters_.last_session = *session_id_;
@@ -311,6 +316,8 @@ void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_pa
     if (w.new_location) {
       store_->insertLocation(*w.new_location);
       store_->insertWordRefs(w.new_location->id, w.refs);
+      if (!w.keypoint_descriptors.empty())
+        store_->putState(keypointDescriptorsKey(w.new_location->id), w.keypoint_descriptors);
     }
     if (w.frame.location_id) store_->addCoveredFrame(*w.frame.location_id, r.frame_id);
     if (w.weight) store_->updateWeight(w.weight->first, w.weight->second);

@@ -18,8 +18,23 @@ double similarityOf(const std::vector<LocationSimilarity>& similarities, Locatio
 
 }  // namespace
 
-GeometricView MapImpl::viewOf(const std::vector<storage::WordRef>& refs) const {
+std::string keypointDescriptorsKey(std::int64_t location_id) {
+  return "keypoint_descriptors/" + std::to_string(location_id);
+}
+
+GeometricView MapImpl::viewOf(std::int64_t location_id,
+                              const std::vector<storage::WordRef>& refs) const {
   GeometricView view;
+  // The location's own descriptors when it has them (three times the matches of word
+  // descriptors on lip6_outdoor); maps made before they were kept fall back to its words'.
+  if (auto bytes = store_->getState(keypointDescriptorsKey(location_id))) {
+    view.descriptors = decodeDescriptors(*bytes, vocabulary_->dim());
+    if (view.descriptors.rows == static_cast<int>(refs.size())) {
+      for (const auto& ref : refs) view.points.emplace_back(ref.x, ref.y);
+      return view;
+    }
+    view.descriptors.release();
+  }
   view.points.reserve(refs.size());
   view.descriptors.create(static_cast<int>(refs.size()), vocabulary_->dim(), CV_32F);
   int row = 0;
@@ -92,7 +107,7 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   for (LocationId c : candidates) {
     auto it = refs.find(c);
     if (it == refs.end()) continue;
-    const GeometricResult g = checkGeometry(query, viewOf(it->second), geometry);
+    const GeometricResult g = checkGeometry(query, viewOf(c, it->second), geometry);
     if (g.inliers > best) {
       best = g.inliers;
       v.location = c;
