@@ -1,0 +1,125 @@
+#pragma once
+// The engine's public face: open a map, process images, read results, close.
+//
+//   placedb::Options options;                       // or Options::fromSettings(...)
+//   auto map = placedb::Map::open("run.placedb", options);
+//   map->beginSession("frames.txt");                // or resumeSession(map->lastSession()->id)
+//   placedb::FrameResult r = map->process(image, 0, "images/0.png");
+//   map->close();                                   // a clean close; the destructor also closes
+//
+// Every processed frame is committed to the map before process() returns, so a killed process
+// loses at most the frame in flight and resumes exactly where it stopped.
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "placedb/error.h"
+#include "placedb/options.h"
+
+namespace placedb {
+
+enum class FrameOutcome { kNewLocation = 0, kMerged = 1, kBad = 2 };
+
+struct StageTimes {  // milliseconds
+  double features = 0, quantisation = 0, likelihood = 0, filter = 0, memory = 0, storage = 0,
+         total = 0;
+};
+
+struct FrameRef {  // one input frame that a location covers
+  std::int64_t frame_id = 0;
+  std::int64_t session_id = 0;
+  std::int64_t source_index = 0;
+  std::string source_path;
+};
+
+struct Hypothesis {
+  std::int64_t location_id = 0;   // 0: no hypothesis (empty working memory)
+  std::vector<FrameRef> frames;   // the frames that location covers
+  double posterior = 0;           // the posterior of that location
+  double score = 0;               // loop-closure probability, 1 - p(new place)
+  bool accepted = false;
+  std::string rejected_reason;    // why it was not accepted; empty when accepted
+};
+
+struct FrameResult {
+  std::int64_t frame_id = 0;
+  std::int64_t session_id = 0;
+  std::int64_t source_index = 0;
+  FrameOutcome outcome = FrameOutcome::kNewLocation;
+  std::int64_t location_id = 0;   // the location holding this frame; 0 when bad
+  Hypothesis hypothesis;
+  StageTimes times;
+  std::size_t feature_count = 0;
+  std::size_t words_created = 0;
+  std::size_t vocabulary_size = 0;  // words in the kd-index (STM + WM)
+  std::size_t stm_size = 0, wm_size = 0;
+  std::size_t transferred = 0, retrieved = 0;  // tier moves this frame
+  double mean_quantisation_error = 0;
+};
+
+struct SessionInfo {
+  std::int64_t id = 0;
+  std::string source;
+  std::string started_at, ended_at;   // ISO 8601 UTC; ended_at empty while open or after a crash
+  bool clean_close = false;
+  std::int64_t frames = 0;
+  std::optional<std::int64_t> last_source_index;  // of the last committed frame
+};
+
+struct QueryMatch {  // localisation: a stored location that resembles the query image
+  std::int64_t location_id = 0;
+  double similarity = 0;  // eq. 5 against the location's signature
+  std::vector<FrameRef> frames;
+};
+
+struct QueryResult {
+  std::size_t feature_count = 0;
+  std::vector<QueryMatch> matches;  // best first
+  double time_ms = 0;
+};
+
+class Map {
+ public:
+  enum class Mode { kMapping, kLocalisation };
+
+  // Creates the file when missing (mapping mode only), checks and migrates it, and restores
+  // short-term and working memory, the vocabulary index and the filter from it.
+  // kLocalisation opens read-only and never changes the file.
+  static std::unique_ptr<Map> open(const std::string& path, const Options& options,
+                                   Mode mode = Mode::kMapping);
+  virtual ~Map() = default;
+
+  virtual std::optional<SessionInfo> lastSession() const = 0;
+  virtual std::vector<SessionInfo> sessions() const = 0;
+  // The settings a session ran with (Options::fromSettings accepts them).
+  virtual std::map<std::string, std::string> sessionSettings(std::int64_t session_id) const = 0;
+
+  // Mapping: starts a new session over `source`, or continues an interrupted one with the
+  // settings it was started with.
+  virtual SessionInfo beginSession(const std::string& source) = 0;
+  virtual SessionInfo resumeSession(std::int64_t session_id) = 0;
+
+  // One frame: features, quantisation, STM, filter, memory management, one committed
+  // transaction. An image too poor in features is recorded as a bad frame.
+  virtual FrameResult process(const cv::Mat& image, std::int64_t source_index,
+                              const std::string& source_path) = 0;
+  // A frame that could not be read: recorded as bad, with the reason in the log only.
+  virtual FrameResult recordUnreadable(std::int64_t source_index,
+                                       const std::string& source_path) = 0;
+
+  // Localisation against every stored location (any tier); changes nothing.
+  virtual QueryResult query(const cv::Mat& image, std::size_t top_k = 5) = 0;
+
+  // Ends the session cleanly. Safe to call twice.
+  virtual void close() = 0;
+
+  virtual const Options& options() const = 0;
+  virtual const std::string& path() const = 0;
+};
+
+}  // namespace placedb

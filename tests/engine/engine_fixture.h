@@ -1,0 +1,55 @@
+#pragma once
+// Shared helpers of the engine tests: reading a data set's frame list and mapping frames.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "engine/map_impl.h"
+#include "features/image_conversion.h"
+#include "placedb/map.h"
+#include "test_paths.h"
+
+namespace placedb::testing {
+
+struct Sequence {
+  std::vector<std::string> paths;
+  std::vector<cv::Mat> images;  // loaded once: several runs map the same frames
+};
+
+inline Sequence loadSequence(const std::filesystem::path& dir, std::size_t limit = 0) {
+  Sequence s;
+  std::ifstream in(dir / "frames.txt");
+  std::string line;
+  while (std::getline(in, line) && (limit == 0 || s.paths.size() < limit)) {
+    if (line.empty() || line[0] == '#') continue;
+    s.paths.push_back((dir / line).string());
+    s.images.push_back(loadGreyImage(s.paths.back()));
+  }
+  return s;
+}
+
+inline void removeMap(const std::filesystem::path& p) {
+  for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(p.string() + suffix);
+}
+
+inline MapImpl& impl(Map& map) { return dynamic_cast<MapImpl&>(map); }
+
+// What a run must reproduce exactly when resumed.
+struct Outcome {
+  std::int64_t location = 0, hypothesis = 0;
+  FrameOutcome outcome = FrameOutcome::kNewLocation;
+  double posterior = 0, score = 0;
+  bool accepted = false;
+  std::size_t wm = 0, stm = 0, vocabulary = 0, transferred = 0, retrieved = 0;
+};
+
+inline Outcome outcomeOf(const FrameResult& r) {
+  return {r.location_id,  r.hypothesis.location_id, r.outcome,  r.hypothesis.posterior,
+          r.hypothesis.score, r.hypothesis.accepted, r.wm_size, r.stm_size, r.vocabulary_size,
+          r.transferred, r.retrieved};
+}
+
+}  // namespace placedb::testing
