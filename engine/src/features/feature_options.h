@@ -1,0 +1,62 @@
+#pragma once
+// Settings of every feature extractor, with their documented defaults and valid ranges.
+#include <string>
+#include <vector>
+
+namespace placedb {
+
+// Defaults follow RTAB-Map's SURF defaults (SURF/HessianThreshold 500, SURF/Octaves 4,
+// SURF/OctaveLayers 2, SURF/Upright false, SURF/Extended false) so that its published settings
+// can be carried over. They are meant to be tuned on real loop-closure data.
+struct FeatureOptions {
+  // "surf" (ours, 64-d float), "sift" (OpenCV, 128-d float), "kaze" (OpenCV, 64-d float) or
+  // "orb" (OpenCV, 32-byte binary; refused for mapping, see makeFeatureExtractor()).
+  std::string extractor = "surf";
+
+  // SURF: minimum determinant of the box-filter Hessian for a blob to be kept. The responses are
+  // scaled exactly as OpenCV's SURF (intensities 0..255, each box normalised by its own area),
+  // so a threshold here means what it means in OpenCV/RTAB-Map. Range: >= 0, finite.
+  double hessian_threshold = 500.0;
+  // SURF and KAZE: number of octaves (octaves whose filters exceed the image are skipped).
+  // Range [1, 8].
+  int octaves = 4;
+  // SURF: scale intervals searched per octave; each octave evaluates intervals + 2 filter sizes
+  // (the default 2 gives the paper's 4 filters per octave: 9, 15, 21, 27 in the first octave).
+  // Same meaning as OpenCV's nOctaveLayers. Range [1, 8].
+  int intervals = 2;
+  // SURF: maxima whose Hessian has a principal curvature ratio above this are dropped as edges
+  // (SIFT's edge test). Not in the SURF paper: box filters let oblique edges through, and this
+  // raised repeatability under a 30-degree rotation from 0.50 to 0.60 on the test pairs.
+  // 0 turns it off (the published detector). Range: 0 or [1, 100].
+  double edge_ratio = 5.0;
+  // SURF and KAZE: U-SURF (no orientation, angle -1). SIFT and ORB ignore it.
+  bool upright = false;
+  // Keep at most this many features, strongest response first; 0 keeps all (ORB: 0 means 1000,
+  // because OpenCV's ORB needs a cap). Range [0, 1000000].
+  int max_features = 0;
+  // Drop features whose detector response is below this (in each detector's own units).
+  // Range: >= 0, finite.
+  float min_response = 0.0f;
+  // SURF: worker threads for the Hessian layers, orientations and descriptors; results do not
+  // depend on it. 0 = all hardware threads. The OpenCV extractors follow cv::setNumThreads()
+  // instead. Range [0, 64].
+  int threads = 1;
+
+  // SIFT: OpenCV's contrastThreshold. Range (0, 1].
+  double sift_contrast_threshold = 0.04;
+  // KAZE: OpenCV's detector response threshold. Range (0, 1].
+  double kaze_threshold = 0.001;
+  // ORB: OpenCV's fastThreshold. Range [1, 255].
+  int orb_fast_threshold = 20;
+};
+
+// Names accepted in FeatureOptions::extractor.
+const std::vector<std::string>& knownExtractorNames();
+
+// Throws Error(kInvalidArgument) naming the first bad setting and its valid range.
+void validateFeatureOptions(const FeatureOptions& options);
+
+// The number of worker threads `threads` stands for (0 -> hardware concurrency, at least 1).
+int resolveThreadCount(int threads);
+
+}  // namespace placedb

@@ -1,0 +1,306 @@
+#include "features/surf_detector.h"
+
+#include <cmath>
+#include <cstdint>
+
+#include "features/parallel_for.h"
+
+namespace placedb {
+namespace {
+
+// Offsets (into the integral table, relative to the filter centre's entry) of a box's corners.
+struct BoxCorners {
+  int top_left = 0, top_right = 0, bottom_left = 0, bottom_right = 0;
+
+  // The box covers pixels [x + left, x + right) x [y + top, y + bottom) around centre (x, y).
+  BoxCorners(int left, int top, int right, int bottom, int stride)
+      : top_left(top * stride + left),
+        top_right(top * stride + right),
+        bottom_left(bottom * stride + left),
+        bottom_right(bottom * stride + right) {}
+
+  std::uint32_t sum(const std::uint32_t* centre) const {
+    return centre[bottom_right] - centre[top_right] - centre[bottom_left] + centre[top_left];
+  }
+};
+
+// The determinant-of-Hessian map of one filter size, sampled every `step` pixels.
+struct ResponseLayer {
+  int filter_size = 0;
+  int step = 1;
+  int rows = 0, cols = 0;
+  // Cells [first, last] (inclusive) in each direction are those where the filter fits.
+  int first_col = 0, last_col = -1, first_row = 0, last_row = -1;
+  std::vector<float> det;  // rows x cols; zero where the filter does not fit
+
+  float at(int r, int c) const { return det[static_cast<std::size_t>(r) * cols + c]; }
+};
+
+constexpr int kRowsPerTask = 16;
+// Interpolated extrema further than this (in samples) from their sample belong to a neighbour.
+constexpr double kMaxInterpolationOffset = 0.5;
+long long sumOfSquares(int from, int to) {  // from^2 + ... + to^2, 0 <= from <= to
+  auto upTo = [](long long n) { return n * (n + 1) * (2 * n + 1) / 6; };
+  return upTo(to) - (from > 0 ? upTo(from - 1) : 0);
+}
+
+// The weight of Dxy in det = Dxx Dyy - (w Dxy)^2. The paper fixes w = 0.9, derived for the
+// 9-pixel filter; but the Dxy boxes (lobe x lobe) shrink relative to the Dxx/Dyy lobes
+// (lobe x (2 lobe - 1)) as filters grow, so a constant w lets oblique edges through at larger
+// scales and makes the detector far less rotation invariant. Here w makes the box filters exact
+// on quadratic intensity (x^2 / 2 and x y give Dxx and w Dxy equal to their true curvature times
+// the same factor) at every filter size: 0.94 at 9 px, 1.25 at 15 px, 1.53 at 27 px.
+float dxyWeight(int lobe) {
+  const int lobe_half = (lobe - 1) / 2;
+  // Dxx of x^2 / 2: (2 lobe - 1) rows x (outer lobes - 2 x middle lobe) sums of x^2 / 2.
+  const long long outer = sumOfSquares(lobe_half + 1, lobe_half + lobe);
+  const long long middle = 2 * sumOfSquares(1, lobe_half);
+  const double dxx = (2.0 * lobe - 1.0) * (2.0 * outer - 2.0 * middle) / 2.0;
+  // Dxy of x y: four boxes, each (1 + ... + lobe)^2.
+  const double side_sum = lobe * (lobe + 1) / 2.0;
+  const double dxy = 4.0 * side_sum * side_sum;
+  return static_cast<float>(dxx / dxy);
+}
+
+ResponseLayer makeLayer(const IntegralImage& integral, int octave, int layer) {
+  ResponseLayer out;
+  out.filter_size = surfFilterSize(octave, layer);
+  out.step = 1 << octave;
+  out.cols = (integral.width() + out.step - 1) / out.step;
+  out.rows = (integral.height() + out.step - 1) / out.step;
+  const int half = (out.filter_size - 1) / 2;
+  out.first_col = (half + out.step - 1) / out.step;
+  out.first_row = out.first_col;
+  out.last_col = integral.width() - 1 - half >= 0 ? (integral.width() - 1 - half) / out.step : -1;
+  out.last_row = integral.height() - 1 - half >= 0 ? (integral.height() - 1 - half) / out.step : -1;
+  out.det.assign(static_cast<std::size_t>(out.rows) * out.cols, 0.0f);
+  return out;
+}
+
+// The three box filters of one filter size, as offsets from the centre's integral entry.
+class HessianBoxes {
+ public:
+  HessianBoxes(int filter_size, int stride)
+      : lobe_(filter_size / 3),
+        half_((filter_size - 1) / 2),
+        lobe_half_((lobe_ - 1) / 2),
+        // Dyy = three lobes stacked vertically (+1, -2, +1) = whole column - 3 x middle lobe.
+        dyy_whole_(-(lobe_ - 1), -half_, lobe_, half_ + 1, stride),
+        dyy_middle_(-(lobe_ - 1), -lobe_half_, lobe_, lobe_half_ + 1, stride),
+        dxx_whole_(-half_, -(lobe_ - 1), half_ + 1, lobe_, stride),
+        dxx_middle_(-lobe_half_, -(lobe_ - 1), lobe_half_ + 1, lobe_, stride),
+        // Dxy = four lobe x lobe boxes around the centre, one pixel apart: + - / - +.
+        dxy_top_left_(-lobe_, -lobe_, 0, 0, stride),
+        dxy_top_right_(1, -lobe_, lobe_ + 1, 0, stride),
+        dxy_bottom_left_(-lobe_, 1, 0, lobe_ + 1, stride),
+        dxy_bottom_right_(1, 1, lobe_ + 1, lobe_ + 1, stride),
+        dxy_weight_(dxyWeight(lobe_)),
+        // OpenCV's scale for Dxx and Dyy, so that Hessian thresholds keep their usual meaning.
+        inv_lobe_area_(1.0f / static_cast<float>(lobe_ * (2 * lobe_ - 1))) {}
+
+  // Box sums wrap like the table itself; the int32 casts recover the exact signed values.
+  void responses(const std::uint32_t* centre, float& dxx, float& dyy, float& dxy) const {
+    const auto dyy_int =
+        static_cast<std::int32_t>(dyy_whole_.sum(centre) - 3u * dyy_middle_.sum(centre));
+    const auto dxx_int =
+        static_cast<std::int32_t>(dxx_whole_.sum(centre) - 3u * dxx_middle_.sum(centre));
+    const auto dxy_int = static_cast<std::int32_t>(
+        dxy_top_left_.sum(centre) + dxy_bottom_right_.sum(centre) - dxy_top_right_.sum(centre) -
+        dxy_bottom_left_.sum(centre));
+    dxx = static_cast<float>(dxx_int) * inv_lobe_area_;
+    dyy = static_cast<float>(dyy_int) * inv_lobe_area_;
+    dxy = static_cast<float>(dxy_int) * inv_lobe_area_ * dxy_weight_;
+  }
+
+ private:
+  int lobe_, half_, lobe_half_;
+  BoxCorners dyy_whole_, dyy_middle_, dxx_whole_, dxx_middle_;
+  BoxCorners dxy_top_left_, dxy_top_right_, dxy_bottom_left_, dxy_bottom_right_;
+  float dxy_weight_;
+  float inv_lobe_area_;
+};
+
+const std::uint32_t* centreEntry(const IntegralImage& integral, int x, int y) {
+  return integral.data() + static_cast<std::size_t>(y) * integral.stride() + x;
+}
+
+void computeLayerRows(const IntegralImage& integral, ResponseLayer& layer, int row_begin,
+                      int row_end) {
+  const HessianBoxes boxes(layer.filter_size, integral.stride());
+  const int r0 = std::max(row_begin, layer.first_row);
+  const int r1 = std::min(row_end - 1, layer.last_row);
+  for (int r = r0; r <= r1; ++r) {
+    float* out = &layer.det[static_cast<std::size_t>(r) * layer.cols];
+    for (int c = layer.first_col; c <= layer.last_col; ++c) {
+      float dxx, dyy, dxy;
+      boxes.responses(centreEntry(integral, c * layer.step, r * layer.step), dxx, dyy, dxy);
+      out[c] = dxx * dyy - dxy * dxy;
+    }
+  }
+}
+
+// True for edge-like maxima: box filters are not fully rotation invariant, so oblique edges can
+// reach a positive determinant, but their Hessian stays strongly anisotropic (as in SIFT's edge
+// test: trace^2 / det exceeds (ratio + 1)^2 / ratio for a principal curvature ratio over `ratio`).
+bool isEdgeLike(const IntegralImage& integral, const ResponseLayer& layer, int r, int c, float det,
+                float ratio) {
+  const HessianBoxes boxes(layer.filter_size, integral.stride());
+  float dxx, dyy, dxy;
+  boxes.responses(centreEntry(integral, c * layer.step, r * layer.step), dxx, dyy, dxy);
+  const float trace = dxx + dyy;
+  return trace * trace * ratio >= (ratio + 1) * (ratio + 1) * det;
+}
+
+// Solves the 3x3 symmetric system a * x = b by Cramer's rule; false when singular.
+bool solve3(const double a[3][3], const double b[3], double x[3]) {
+  const double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+                     a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+                     a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+  if (!(std::abs(det) > 1e-12)) return false;
+  for (int k = 0; k < 3; ++k) {
+    double m[3][3];
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) m[i][j] = j == k ? b[i] : a[i][j];
+    }
+    x[k] = (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+            m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+            m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])) /
+           det;
+  }
+  return true;
+}
+
+bool isStrictMaximum(const ResponseLayer& below, const ResponseLayer& middle,
+                     const ResponseLayer& above, int r, int c, float value) {
+  for (int dr = -1; dr <= 1; ++dr) {
+    for (int dc = -1; dc <= 1; ++dc) {
+      if (below.at(r + dr, c + dc) >= value || above.at(r + dr, c + dc) >= value) return false;
+      if ((dr != 0 || dc != 0) && middle.at(r + dr, c + dc) >= value) return false;
+    }
+  }
+  return true;
+}
+
+// Fits a quadratic to the 3x3x3 neighbourhood; false when the fit is degenerate or its peak lies
+// nearer another sample.
+bool interpolateExtremum(const ResponseLayer& below, const ResponseLayer& middle,
+                         const ResponseLayer& above, int r, int c, int octave,
+                         cv::KeyPoint& keypoint) {
+  const double v = middle.at(r, c);
+  const double gradient[3] = {(middle.at(r, c + 1) - middle.at(r, c - 1)) / 2.0,
+                              (middle.at(r + 1, c) - middle.at(r - 1, c)) / 2.0,
+                              (above.at(r, c) - below.at(r, c)) / 2.0};
+  const double dxx = middle.at(r, c + 1) - 2 * v + middle.at(r, c - 1);
+  const double dyy = middle.at(r + 1, c) - 2 * v + middle.at(r - 1, c);
+  const double dss = above.at(r, c) - 2 * v + below.at(r, c);
+  const double dxy = (middle.at(r + 1, c + 1) - middle.at(r + 1, c - 1) -
+                      middle.at(r - 1, c + 1) + middle.at(r - 1, c - 1)) /
+                     4.0;
+  const double dxs = (above.at(r, c + 1) - above.at(r, c - 1) - below.at(r, c + 1) +
+                      below.at(r, c - 1)) /
+                     4.0;
+  const double dys = (above.at(r + 1, c) - above.at(r - 1, c) - below.at(r + 1, c) +
+                      below.at(r - 1, c)) /
+                     4.0;
+  const double hessian[3][3] = {{dxx, dxy, dxs}, {dxy, dyy, dys}, {dxs, dys, dss}};
+  const double rhs[3] = {-gradient[0], -gradient[1], -gradient[2]};
+  double offset[3];
+  if (!solve3(hessian, rhs, offset)) return false;
+  for (double o : offset) {
+    if (!(std::abs(o) <= kMaxInterpolationOffset)) return false;
+  }
+  const double step = middle.step;
+  keypoint.pt.x = static_cast<float>((c + offset[0]) * step);
+  keypoint.pt.y = static_cast<float>((r + offset[1]) * step);
+  keypoint.size = static_cast<float>(middle.filter_size +
+                                     offset[2] * (above.filter_size - middle.filter_size));
+  keypoint.response = static_cast<float>(
+      v + 0.5 * (gradient[0] * offset[0] + gradient[1] * offset[1] + gradient[2] * offset[2]));
+  keypoint.angle = -1;
+  keypoint.octave = octave;
+  return true;
+}
+
+void findExtremaRows(const IntegralImage& integral, const ResponseLayer& below,
+                     const ResponseLayer& middle, const ResponseLayer& above, int octave,
+                     const SurfDetectorSettings& settings, int row_begin, int row_end,
+                     std::vector<cv::KeyPoint>& found) {
+  const auto threshold = static_cast<float>(settings.hessian_threshold);
+  const auto edge_ratio = static_cast<float>(settings.edge_ratio);
+  // Every neighbour must be a valid sample of the largest filter (the layer above).
+  const int r0 = std::max(row_begin, above.first_row + 1);
+  const int r1 = std::min(row_end - 1, above.last_row - 1);
+  const int c0 = above.first_col + 1;
+  const int c1 = above.last_col - 1;
+  for (int r = r0; r <= r1; ++r) {
+    const float* row = &middle.det[static_cast<std::size_t>(r) * middle.cols];
+    for (int c = c0; c <= c1; ++c) {
+      const float value = row[c];
+      if (!(value > threshold)) continue;
+      if (!isStrictMaximum(below, middle, above, r, c, value)) continue;
+      if (edge_ratio > 0 && isEdgeLike(integral, middle, r, c, value, edge_ratio)) continue;
+      cv::KeyPoint keypoint;
+      if (interpolateExtremum(below, middle, above, r, c, octave, keypoint)) {
+        found.push_back(keypoint);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+int surfFilterSize(int octave, int layer) { return 3 * ((2 << octave) * (layer + 1) + 1); }
+
+std::vector<cv::KeyPoint> detectSurfBlobs(const IntegralImage& integral,
+                                          const SurfDetectorSettings& settings) {
+  const int layers_per_octave = settings.intervals + 2;
+  std::vector<ResponseLayer> layers;
+  for (int octave = 0; octave < settings.octaves; ++octave) {
+    // Octaves whose largest filter does not fit anywhere add nothing.
+    const int largest = surfFilterSize(octave, layers_per_octave - 1);
+    if (largest + 2 * (1 << octave) > std::min(integral.width(), integral.height())) break;
+    for (int layer = 0; layer < layers_per_octave; ++layer) {
+      layers.push_back(makeLayer(integral, octave, layer));
+    }
+  }
+  const int octaves = static_cast<int>(layers.size()) / layers_per_octave;
+
+  // Responses: one task per block of rows of one layer.
+  struct RowBlock {
+    int item, row_begin, row_end;
+  };
+  std::vector<RowBlock> response_tasks;
+  for (int i = 0; i < static_cast<int>(layers.size()); ++i) {
+    for (int r = 0; r < layers[i].rows; r += kRowsPerTask) {
+      response_tasks.push_back({i, r, std::min(r + kRowsPerTask, layers[i].rows)});
+    }
+  }
+  parallelFor(static_cast<int>(response_tasks.size()), settings.threads, [&](int t) {
+    const RowBlock& task = response_tasks[t];
+    computeLayerRows(integral, layers[task.item], task.row_begin, task.row_end);
+  });
+
+  // Extrema: one task per block of rows of one middle layer, concatenated in task order.
+  std::vector<RowBlock> extrema_tasks;
+  for (int octave = 0; octave < octaves; ++octave) {
+    for (int layer = 1; layer <= settings.intervals; ++layer) {
+      const int index = octave * layers_per_octave + layer;
+      for (int r = 0; r < layers[index].rows; r += kRowsPerTask) {
+        extrema_tasks.push_back({index, r, std::min(r + kRowsPerTask, layers[index].rows)});
+      }
+    }
+  }
+  std::vector<std::vector<cv::KeyPoint>> found(extrema_tasks.size());
+  parallelFor(static_cast<int>(extrema_tasks.size()), settings.threads, [&](int t) {
+    const RowBlock& task = extrema_tasks[t];
+    findExtremaRows(integral, layers[task.item - 1], layers[task.item], layers[task.item + 1],
+                    task.item / layers_per_octave, settings, task.row_begin, task.row_end,
+                    found[t]);
+  });
+
+  std::vector<cv::KeyPoint> keypoints;
+  for (auto& block : found) keypoints.insert(keypoints.end(), block.begin(), block.end());
+  return keypoints;
+}
+
+}  // namespace placedb

@@ -1,0 +1,23 @@
+#pragma once
+// Our SURF-64 behind the FeatureExtractor interface.
+#include <string>
+
+#include "features/feature_extractor.h"
+
+namespace placedb {
+
+class SurfExtractor : public FeatureExtractor {
+ public:
+  // Options are validated here (Error kInvalidArgument on bad values).
+  explicit SurfExtractor(const FeatureOptions& options);
+
+  Features extract(const cv::Mat& grey8) const override;
+  const std::string& name() const override;
+  int dim() const override;
+  DescriptorType type() const override { return DescriptorType::kFloat32; }
+
+ private:
+  FeatureOptions options_;
+};
+
+}  // namespace placedb
