@@ -1,3 +1,4 @@
+#include <cerrno>
 #include "database.h"
 
 #include <limits>
@@ -33,7 +34,18 @@ void throwSqlite(sqlite3* db, int rc, const std::string& sql, const std::string&
   std::string message =
       what + ": " + sqlite_message + " (SQLite code " + std::to_string(code) + ")";
   if (!sql.empty()) message += " in statement: " + sql;
-  throw StorageError(errorCodeForSqlite(code), message, code, sqlite_message, sql);
+  // Name the map: the message may reach a user far from the open() that named it.
+  if (const char* file = db ? sqlite3_db_filename(db, "main") : nullptr; file && *file)
+    message += std::string(" (map ") + file + ")";
+  ErrorCode placedb_code = errorCodeForSqlite(code);
+  // A write refused by the file system for lack of space or a file-size limit reaches SQLite
+  // as an I/O error; the user needs to hear "disk full", not "I/O".
+  if ((code & 0xff) == SQLITE_IOERR && db) {
+    const int os_error = sqlite3_system_errno(db);
+    if (os_error == ENOSPC || os_error == EFBIG || os_error == EDQUOT)
+      placedb_code = ErrorCode::kDiskFull;
+  }
+  throw StorageError(placedb_code, message, code, sqlite_message, sql);
 }
 
 Statement::Statement(sqlite3* db, std::string sql) : db_(db), sql_(std::move(sql)) {

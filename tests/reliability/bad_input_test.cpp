@@ -389,7 +389,7 @@ TEST_F(BadMaps, ZeroedPagesAreRefusedAtOpenOrWhenReadWithATypedError) {
 // Fails today: SQLite errors met after opening ("database disk image is malformed ... in
 // statement: SELECT ...") do not say which file. Proposed fix (storage/src/database.cpp,
 // detail::throwSqlite): append sqlite3_db_filename(db, "main") to the message.
-TEST_F(BadMaps, DISABLED_ErrorsFromDamagedPagesNameTheMapFile) {
+TEST_F(BadMaps, ErrorsFromDamagedPagesNameTheMapFile) {
   const auto outcomes = zeroEachPage(dir_, good_);
   EXPECT_TRUE(outcomes.unnamed.empty())
       << outcomes.unnamed.size() << " messages, e.g. " << outcomes.unnamed.front();

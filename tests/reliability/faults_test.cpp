@@ -179,7 +179,8 @@ TEST(DiskFull, DISABLED_FileSizeLimitFailsTheFrameAndKeepsTheMapOpenable) {
   EXPECT_EQ(storedFrames(map).size(), 40u);
 }
 
-// Fails today with kIo ("disk I/O error (SQLite code 778)"). Proposed fix in storage
+// Fails today with kIo ("disk I/O error (SQLite code 778)"): throwSqlite maps ENOSPC/EFBIG/EDQUOT
+// to kDiskFull, but sqlite3_system_errno() does not carry EFBIG here; to investigate. Proposed fix in storage
 // (detail::throwSqlite): SQLITE_IOERR with sqlite3_system_errno() ENOSPC, EFBIG or EDQUOT is
 // ErrorCode::kDiskFull.
 TEST(DiskFull, DISABLED_FileSizeLimitIsReportedAsDiskFull) {
