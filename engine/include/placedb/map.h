@@ -112,7 +112,8 @@ class Map {
   virtual FrameResult recordUnreadable(std::int64_t source_index,
                                        const std::string& source_path) = 0;
 
-  // Localisation against every stored location (any tier); changes nothing.
+  // Localisation against the locations in short-term and working memory (LTM locations are not
+  // searched yet); changes nothing.
   virtual QueryResult query(const cv::Mat& image, std::size_t top_k = 5) = 0;
 
   // Ends the session cleanly. Safe to call twice.
