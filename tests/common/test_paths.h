@@ -4,6 +4,8 @@
 #include <filesystem>
 #include <string>
 
+#include <unistd.h>
+
 namespace placedb::testing {
 
 // PLACEDB_DATASETS overrides the folder fixed at configure time.
@@ -18,9 +20,11 @@ inline std::filesystem::path dataset(const std::string& name) {
   return std::filesystem::exists(dir / "frames.txt") ? dir : std::filesystem::path();
 }
 
-// A fresh, empty folder under the build tree for one test.
+// A fresh, empty folder under the build tree for one test. ctest runs tests in parallel, each in
+// its own process, and fixtures share names: the process id keeps their folders apart.
 inline std::filesystem::path scratchDir(const std::string& test_name) {
-  auto dir = std::filesystem::path(PLACEDB_TEST_BINARY_DIR) / "scratch" / test_name;
+  auto dir = std::filesystem::path(PLACEDB_TEST_BINARY_DIR) / "scratch" /
+             (test_name + "." + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
