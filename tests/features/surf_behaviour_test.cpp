@@ -1,0 +1,144 @@
+// SURF-64 contract: the same bits every time, unit descriptors, ranking and limits honoured,
+// upright mode, and thread count not changing the result.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+#include <opencv2/imgproc.hpp>
+
+#include "features/feature_extractor.h"
+#include "features/image_conversion.h"
+#include "test_paths.h"
+
+namespace placedb {
+namespace {
+
+// A real frame when the data sets are there, else blobs of many sizes on a ramp (the contract
+// does not depend on the scene, so these tests never skip).
+cv::Mat testImage() {
+  const auto dir = testing::dataset("lip6_outdoor");
+  if (!dir.empty()) {
+    return loadGreyImage((dir / "images/outdoor_kennedylong_000200.png").string());
+  }
+  cv::Mat image(240, 320, CV_8UC1);
+  for (int y = 0; y < image.rows; ++y)
+    for (int x = 0; x < image.cols; ++x) image.at<uchar>(y, x) = static_cast<uchar>(60 + x / 4);
+  cv::RNG rng(3);
+  for (int i = 0; i < 120; ++i) {
+    cv::circle(image, {rng.uniform(0, image.cols), rng.uniform(0, image.rows)}, rng.uniform(2, 14),
+               cv::Scalar(rng.uniform(0, 256)), cv::FILLED, cv::LINE_AA);
+  }
+  return image;
+}
+
+Features surfOf(const cv::Mat& image, FeatureOptions options = FeatureOptions()) {
+  options.extractor = "surf";
+  return makeFeatureExtractor(options)->extract(image);
+}
+
+bool bitIdentical(const Features& a, const Features& b) {
+  if (a.size() != b.size() || a.descriptors.size() != b.descriptors.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const Keypoint& p = a.keypoints[i];
+    const Keypoint& q = b.keypoints[i];
+    if (std::memcmp(&p.x, &q.x, sizeof(float)) || std::memcmp(&p.y, &q.y, sizeof(float)) ||
+        std::memcmp(&p.size, &q.size, sizeof(float)) ||
+        std::memcmp(&p.angle, &q.angle, sizeof(float)) ||
+        std::memcmp(&p.response, &q.response, sizeof(float)) || p.octave != q.octave) {
+      return false;
+    }
+  }
+  const std::size_t bytes = a.descriptors.total() * a.descriptors.elemSize();
+  return bytes == 0 || std::memcmp(a.descriptors.data, b.descriptors.data, bytes) == 0;
+}
+
+TEST(SurfBehaviour, SameImageGivesBitIdenticalResult) {
+  const cv::Mat image = testImage();
+  const Features first = surfOf(image);
+  ASSERT_GT(first.size(), 50u) << "too few features for the test to mean anything";
+  EXPECT_TRUE(bitIdentical(first, surfOf(image.clone())));
+}
+
+TEST(SurfBehaviour, ThreadCountDoesNotChangeTheBits) {
+  const cv::Mat image = testImage();
+  FeatureOptions two;
+  two.threads = 2;
+  EXPECT_TRUE(bitIdentical(surfOf(image), surfOf(image, two)));
+}
+
+TEST(SurfBehaviour, ShapeAndDescriptorsAreUnitLength) {
+  const Features features = surfOf(testImage());
+  EXPECT_EQ(features.extractor, "surf");
+  EXPECT_EQ(features.dim, 64);
+  EXPECT_EQ(features.type, DescriptorType::kFloat32);
+  ASSERT_EQ(features.descriptors.rows, static_cast<int>(features.size()));
+  ASSERT_EQ(features.descriptors.cols, 64);
+  ASSERT_EQ(features.descriptors.type(), CV_32F);
+  EXPECT_TRUE(features.descriptors.isContinuous());
+  for (int i = 0; i < features.descriptors.rows; ++i) {
+    EXPECT_NEAR(cv::norm(features.descriptors.row(i)), 1.0, 1e-4) << "descriptor " << i;
+  }
+}
+
+TEST(SurfBehaviour, StrongestFirstAndResponsesAboveThreshold) {
+  FeatureOptions options;
+  const Features features = surfOf(testImage(), options);
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    EXPECT_GE(features.keypoints[i].response, options.hessian_threshold);
+    EXPECT_GE(features.keypoints[i].angle, 0.0f);
+    EXPECT_LT(features.keypoints[i].angle, 360.0f);
+    if (i > 0) {
+      EXPECT_GE(features.keypoints[i - 1].response, features.keypoints[i].response);
+    }
+  }
+}
+
+TEST(SurfBehaviour, MaxFeaturesKeepsTheStrongest) {
+  const cv::Mat image = testImage();
+  const Features all = surfOf(image);
+  ASSERT_GT(all.size(), 40u);
+  FeatureOptions capped;
+  capped.max_features = 25;
+  const Features top = surfOf(image, capped);
+  ASSERT_EQ(top.size(), 25u);
+  for (std::size_t i = 0; i < top.size(); ++i) {
+    EXPECT_EQ(top.keypoints[i].x, all.keypoints[i].x);
+    EXPECT_EQ(top.keypoints[i].response, all.keypoints[i].response);
+    EXPECT_EQ(cv::norm(top.descriptors.row(i), all.descriptors.row(i), cv::NORM_INF), 0);
+  }
+}
+
+TEST(SurfBehaviour, MinResponseDropsWeakerFeatures) {
+  const cv::Mat image = testImage();
+  const Features all = surfOf(image);
+  ASSERT_GT(all.size(), 40u);
+  FeatureOptions options;
+  options.min_response = all.keypoints[all.size() / 2].response;
+  const Features strong = surfOf(image, options);
+  std::size_t expected = 0;
+  for (const Keypoint& k : all.keypoints) expected += k.response >= options.min_response;
+  EXPECT_EQ(strong.size(), expected);
+  EXPECT_LT(strong.size(), all.size());
+  for (const Keypoint& k : strong.keypoints) EXPECT_GE(k.response, options.min_response);
+}
+
+TEST(SurfBehaviour, UprightGivesAngleMinusOne) {
+  FeatureOptions options;
+  options.upright = true;
+  const Features features = surfOf(testImage(), options);
+  ASSERT_GT(features.size(), 0u);
+  for (const Keypoint& k : features.keypoints) EXPECT_EQ(k.angle, -1.0f);
+  for (int i = 0; i < features.descriptors.rows; ++i) {
+    EXPECT_NEAR(cv::norm(features.descriptors.row(i)), 1.0, 1e-4);
+  }
+}
+
+TEST(SurfBehaviour, FlatImageGivesNoFeatures) {
+  const Features features = surfOf(cv::Mat(120, 160, CV_8UC1, cv::Scalar(128)));
+  EXPECT_EQ(features.size(), 0u);
+  EXPECT_EQ(features.dim, 64);
+}
+
+}  // namespace
+}  // namespace placedb
