@@ -1,5 +1,5 @@
 // Time per image of each extractor at three image sizes, single- and two-threaded.
-//   placedb_bench_features [--images N] [--repeats R] [--datasets DIR]
+//   placedb_bench_features [--images N] [--repeats R] [--datasets DIR] [--max-features N]
 // Images: the first N/2 frames (every 25th) of lip6_outdoor and rtabmap_samples, resized.
 #include <algorithm>
 #include <chrono>
@@ -58,6 +58,7 @@ Row timeExtractor(const std::string& label, const FeatureExtractor& extractor,
 int main(int argc, char** argv) {
   int image_count = 12;
   int repeats = 3;
+  int max_features = 0;  // a common cap makes the extractors' feature counts comparable
   std::filesystem::path datasets = PLACEDB_DATASETS_DIR;
   if (const char* env = std::getenv("PLACEDB_DATASETS")) datasets = env;
   for (int i = 1; i + 1 < argc; i += 2) {
@@ -68,6 +69,8 @@ int main(int argc, char** argv) {
       repeats = std::max(1, std::atoi(argv[i + 1]));
     else if (flag == "--datasets")
       datasets = argv[i + 1];
+    else if (flag == "--max-features")
+      max_features = std::max(0, std::atoi(argv[i + 1]));
   }
   std::vector<cv::Mat> originals;
   for (const char* name : {"lip6_outdoor", "rtabmap_samples"}) {
@@ -97,6 +100,7 @@ int main(int argc, char** argv) {
       cv::setNumThreads(threads);
       FeatureOptions options;
       options.threads = threads;
+      options.max_features = max_features;
       const std::string suffix = " (" + std::to_string(threads) + "T)";
       for (const char* name : {"surf", "sift", "kaze", "orb"}) {
         options.extractor = name;
