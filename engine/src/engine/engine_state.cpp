@@ -60,23 +60,28 @@ bool EngineCounters::load(const storage::MapStore& store) {
   return true;
 }
 
-void VocabularyStateWriter::save(storage::MapStore& store, const vocab::IndexState& state) {
-  if (state.next_word_id != saved_next_word_id_ || saved_splits_ == 0) {
-    vocab::IndexState header = state;
-    header.splits.clear();
+void VocabularyStateWriter::save(storage::MapStore& store, const vocab::Vocabulary& vocabulary) {
+  const std::vector<vocab::SplitRecord>& splits = vocabulary.splitLog();
+  if (vocabulary.nextWordId() != saved_next_word_id_ || saved_splits_ == 0) {
+    vocab::IndexState header;  // Vocabulary::state() without its split log
+    header.dim = vocabulary.dim();
+    header.kd_trees = vocabulary.options().kd_trees;
+    header.leaf_size = vocabulary.options().leaf_size;
+    header.seed = vocabulary.options().seed;
+    header.next_word_id = vocabulary.nextWordId();
     store.putState(kVocabularyHeaderKey, header.serialize());
-    saved_next_word_id_ = state.next_word_id;
+    saved_next_word_id_ = header.next_word_id;
   }
-  if (state.splits.size() == saved_splits_ && saved_splits_ != 0) return;
+  if (splits.size() == saved_splits_ && saved_splits_ != 0) return;
   // Rewrite from the chunk holding the first unsaved split to the end.
-  for (std::size_t chunk = saved_splits_ / kSplitsPerChunk;
-       chunk * kSplitsPerChunk < state.splits.size(); ++chunk) {
+  for (std::size_t chunk = saved_splits_ / kSplitsPerChunk; chunk * kSplitsPerChunk < splits.size();
+       ++chunk) {
     std::size_t begin = chunk * kSplitsPerChunk;
-    std::size_t end = std::min(state.splits.size(), begin + kSplitsPerChunk);
+    std::size_t end = std::min(splits.size(), begin + kSplitsPerChunk);
     std::vector<std::uint8_t> bytes;
     bytes.reserve((end - begin) * kSplitBytes);
     for (std::size_t i = begin; i < end; ++i) {
-      const auto& s = state.splits[i];
+      const auto& s = splits[i];
       put(bytes, s.tree);
       put(bytes, s.node);
       put(bytes, s.dim);
@@ -84,7 +89,7 @@ void VocabularyStateWriter::save(storage::MapStore& store, const vocab::IndexSta
     }
     store.putState(chunkKey(chunk), bytes);
   }
-  saved_splits_ = state.splits.size();
+  saved_splits_ = splits.size();
 }
 
 std::optional<vocab::IndexState> VocabularyStateWriter::load(const storage::MapStore& store) {

@@ -30,8 +30,9 @@ class VocabularyStateWriter {
  public:
   static constexpr std::size_t kSplitsPerChunk = 1024;
 
-  // Writes what changed since the last save() or load().
-  void save(storage::MapStore& store, const vocab::IndexState& state);
+  // Writes what changed since the last save() or load(). Reads the vocabulary's split log in
+  // place: copying it (Vocabulary::state()) every frame would cost as much as the log is long.
+  void save(storage::MapStore& store, const vocab::Vocabulary& vocabulary);
   // Empty optional when the map holds no vocabulary state.
   std::optional<vocab::IndexState> load(const storage::MapStore& store);
 

@@ -328,7 +328,7 @@ void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_pa
     if (w.frame.outcome != storage::FrameOutcome::kBad)
       store_->putPosterior(filter_->state().posterior);
     counters_.save(*store_);
-    vocabulary_state_.save(*store_, vocabulary_->state());
+    vocabulary_state_.save(*store_, *vocabulary_);
     tx.commit();
   } catch (...) {
     broken_ = true;  // RAM is one frame ahead of the file now
