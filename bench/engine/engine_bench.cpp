@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "features/image_conversion.h"
+#include "image_source.h"  // the CLI's list-file reader: same rules as `placedb map`
 #include "placedb/map.h"
 
 namespace fs = std::filesystem;
@@ -29,17 +30,6 @@ struct Row {
   bool accepted = false;
   placedb::StageTimes times;
 };
-
-std::vector<std::string> readList(const fs::path& list) {
-  std::ifstream in(list);
-  std::vector<std::string> paths;
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    paths.push_back((list.parent_path() / line).string());
-  }
-  return paths;
-}
 
 Row toRow(const FrameResult& r) {
   Row row;
@@ -131,7 +121,7 @@ int main(int argc, char** argv) {
   }
   try {
     auto options = placedb::Options::fromSettings(settings);
-    auto frames = readList(list);
+    auto frames = placedb::cli::readListFile(list);
     if (limit && limit < frames.size()) frames.resize(limit);
     resume_at = std::min(resume_at, frames.size());
     fs::create_directories(log_dir);

@@ -17,22 +17,12 @@
 #include <vector>
 
 #include "features/image_conversion.h"
+#include "image_source.h"  // the CLI's list-file reader: same rules as `placedb map`
 #include "placedb/map.h"
 
 namespace fs = std::filesystem;
 
 namespace {
-
-std::vector<std::string> readList(const fs::path& list) {
-  std::ifstream in(list);
-  std::vector<std::string> paths;
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || line[0] == '#') continue;
-    paths.push_back((list.parent_path() / line).string());
-  }
-  return paths;
-}
 
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0;
@@ -82,7 +72,7 @@ int main(int argc, char** argv) {
   if (map_path.empty()) map_path = fs::path(log_path).replace_extension(".placedb");
   try {
     const auto options = placedb::Options::fromSettings(settings);
-    const auto frames = readList(list);
+    const auto frames = placedb::cli::readListFile(list);
     for (const auto& p :
          {map_path.string(), map_path.string() + "-wal", map_path.string() + "-shm"})
       fs::remove(p);
