@@ -9,6 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "features/image_conversion.h"
 #include "placedb/error.h"
 
 namespace placedb::cli {
@@ -208,6 +209,12 @@ cv::Mat readImageFile(const std::string& path, std::string& problem) {
       problem = "truncated JPEG (no end marker)";
       return {};
     }
+  }
+  // Before imdecode: decoding is what allocates the pixels.
+  const std::optional<ImageDimensions> size = readImageDimensions(bytes.data(), bytes.size());
+  if (size && !withinImageLimits(*size)) {
+    problem = fmt::format("image is {}", imageLimitProblem(*size));
+    return {};
   }
   cv::Mat image;
   try {

@@ -48,6 +48,18 @@ cv::Mat toDepth8U(const cv::Mat& image) {
 
 }  // namespace
 
+bool withinImageLimits(const ImageDimensions& size) {
+  return size.width <= static_cast<std::uint32_t>(kMaxImageSide) &&
+         size.height <= static_cast<std::uint32_t>(kMaxImageSide) &&
+         static_cast<std::int64_t>(size.width) * size.height <= kMaxImagePixels;
+}
+
+std::string imageLimitProblem(const ImageDimensions& size) {
+  return std::to_string(size.width) + " x " + std::to_string(size.height) +
+         " pixels; the limit is " + std::to_string(kMaxImageSide) + " pixels a side and " +
+         std::to_string(kMaxImagePixels / 1'000'000) + " megapixels";
+}
+
 cv::Mat toGrey8(const cv::Mat& image) {
   requireUsableSize(image, "image conversion");
   const cv::Mat depth8 = toDepth8U(image);
@@ -66,9 +78,9 @@ cv::Mat toGrey8(const cv::Mat& image) {
       cv::cvtColor(depth8, grey, cv::COLOR_BGRA2GRAY);
       break;
     default:
-      throw Error(ErrorCode::kInvalidArgument, "image conversion: " +
-                                                   std::to_string(depth8.channels()) +
-                                                   " channels are not supported (1 to 4)");
+      throw Error(ErrorCode::kInvalidArgument,
+                  "image conversion: " + std::to_string(depth8.channels()) +
+                      " channels are not supported (1 to 4)");
   }
   // Callers may keep the result while the caller's image changes: never alias it.
   return grey.data == image.data ? grey.clone() : grey;
@@ -78,6 +90,11 @@ cv::Mat loadGreyImage(const std::string& path) {
   std::error_code ignored;
   if (!std::filesystem::is_regular_file(path, ignored)) {
     throw Error(ErrorCode::kIo, "cannot read image '" + path + "': no such file");
+  }
+  // Before imread: decoding is what allocates the pixels.
+  const std::optional<ImageDimensions> size = readImageFileDimensions(path);
+  if (size && !withinImageLimits(*size)) {
+    throw Error(ErrorCode::kInvalidArgument, "image '" + path + "' is " + imageLimitProblem(*size));
   }
   cv::Mat raw;
   try {

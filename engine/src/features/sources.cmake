@@ -3,6 +3,7 @@ target_sources(placedb_engine PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/feature_extractor.cpp
   ${CMAKE_CURRENT_LIST_DIR}/feature_options.cpp
   ${CMAKE_CURRENT_LIST_DIR}/image_conversion.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/image_header.cpp
   ${CMAKE_CURRENT_LIST_DIR}/integral_image.cpp
   ${CMAKE_CURRENT_LIST_DIR}/keypoint_ranking.cpp
   ${CMAKE_CURRENT_LIST_DIR}/opencv_extractors.cpp
