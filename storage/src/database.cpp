@@ -1,6 +1,10 @@
-#include <cerrno>
 #include "database.h"
 
+#include <sys/resource.h>
+#include <sys/statvfs.h>
+
+#include <cerrno>
+#include <filesystem>
 #include <limits>
 
 namespace placedb::storage {
@@ -26,6 +30,31 @@ ErrorCode errorCodeForSqlite(int sqlite_code) noexcept {
 }
 
 namespace detail {
+namespace {
+
+// SQLite's errno is not reliable after a failed write: the unix VFS keeps the write's errno on
+// the file and sqlite3_system_errno() reports whatever errno holds when the error surfaces
+// (often after a rollback's own calls). So look at the cause itself: a folder with almost no
+// free space, or a map or write-ahead log that reached the process' file-size limit.
+bool outOfRoom(const char* map_file) {
+  if (!map_file || !*map_file) return false;
+  const std::filesystem::path map(map_file);
+  constexpr std::uint64_t kSlack = 1 << 20;  // more than a transaction's worth of pages
+  struct statvfs fs {};
+  if (statvfs(map.parent_path().empty() ? "." : map.parent_path().c_str(), &fs) == 0 &&
+      std::uint64_t{fs.f_bavail} * fs.f_frsize < kSlack)
+    return true;
+  rlimit limit{};
+  if (getrlimit(RLIMIT_FSIZE, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return false;
+  for (const std::string& file : {map.string(), map.string() + "-wal", map.string() + "-journal"}) {
+    std::error_code error;
+    const auto size = std::filesystem::file_size(file, error);
+    if (!error && size + kSlack >= limit.rlim_cur) return true;
+  }
+  return false;
+}
+
+}  // namespace
 
 void throwSqlite(sqlite3* db, int rc, const std::string& sql, const std::string& what) {
   const int extended = db ? sqlite3_extended_errcode(db) : rc;
@@ -42,7 +71,9 @@ void throwSqlite(sqlite3* db, int rc, const std::string& sql, const std::string&
   // as an I/O error; the user needs to hear "disk full", not "I/O".
   if ((code & 0xff) == SQLITE_IOERR && db) {
     const int os_error = sqlite3_system_errno(db);
-    if (os_error == ENOSPC || os_error == EFBIG || os_error == EDQUOT)
+    if (os_error == ENOSPC || os_error == EFBIG || os_error == EDQUOT ||
+        (code != SQLITE_IOERR_READ && code != SQLITE_IOERR_SHORT_READ &&
+         outOfRoom(sqlite3_db_filename(db, "main"))))
       placedb_code = ErrorCode::kDiskFull;
   }
   throw StorageError(placedb_code, message, code, sqlite_message, sql);

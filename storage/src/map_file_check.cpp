@@ -96,7 +96,12 @@ FileState checkRawFile(const std::string& path) {
   if (page_size < 512 || page_size > 65536 || (page_size & (page_size - 1)) != 0) {
     refuse(path, "damaged SQLite header (page size " + std::to_string(page_size) + ")");
   }
-  if (size % page_size != 0) {
+  // A checkpoint stopped by a full disk or a file-size limit can leave a partial last page in
+  // the main file; the intact write-ahead log still holds every committed page, and SQLite's
+  // next checkpoint squares the file. So with a non-empty -wal the file is SQLite's to judge.
+  const auto wal_size = std::filesystem::file_size(path + "-wal", error);
+  const bool has_wal = !error && wal_size > 0;
+  if (size % page_size != 0 && !has_wal) {
     refuse(path, "truncated or damaged: " + std::to_string(size) +
                      " bytes is not a whole number of " + std::to_string(page_size) +
                      "-byte pages");
@@ -106,7 +111,6 @@ FileState checkRawFile(const std::string& path) {
   const std::uint32_t change_counter = bigEndian32(&header[24]);
   const std::uint32_t page_count = bigEndian32(&header[28]);
   const std::uint32_t valid_for = bigEndian32(&header[92]);
-  const bool has_wal = std::filesystem::exists(path + "-wal", error);
   if (!has_wal && page_count != 0 && change_counter == valid_for &&
       std::uint64_t{page_count} * page_size > size) {
     refuse(path, "truncated: the header counts " + std::to_string(page_count) +

@@ -155,14 +155,9 @@ std::optional<std::string> fillBySizeLimit(const fs::path& map, std::int64_t& co
   return mapUntilFull(map, {"--frames", "40", "--fsize-limit", std::to_string(limit)}, committed);
 }
 
-// Fails today, a storage bug: the limit can stop a checkpoint half-way through a page, leaving the
-// main file ragged (e.g. 752850 bytes) beside an intact write-ahead log. SQLite opens such a map
-// (integrity_check ok, every committed frame there, and its next checkpoint squares the file),
-// but MapStore's pre-open check refuses it: "truncated or damaged: 752850 bytes is not a whole
-// number of 4096-byte pages", so a disk-full event makes the map unopenable by placedb.
-// Proposed fix (storage/src/map_file_check.cpp): when a non-empty "-wal" file exists, do not
-// refuse a partial last page; let SQLite recover and judge the file.
-TEST(DiskFull, DISABLED_FileSizeLimitFailsTheFrameAndKeepsTheMapOpenable) {
+// The limit can stop a checkpoint half-way through a page, leaving the main file ragged beside an
+// intact write-ahead log: the map must still open, hold every committed frame and resume.
+TEST(DiskFull, FileSizeLimitFailsTheFrameAndKeepsTheMapOpenable) {
   const auto map = scratchDir("DiskFullLimit") / "full.placedb";
   std::int64_t committed = 0;
   auto error = fillBySizeLimit(map, committed);
@@ -179,11 +174,9 @@ TEST(DiskFull, DISABLED_FileSizeLimitFailsTheFrameAndKeepsTheMapOpenable) {
   EXPECT_EQ(storedFrames(map).size(), 40u);
 }
 
-// Fails today with kIo ("disk I/O error (SQLite code 778)"): throwSqlite maps ENOSPC/EFBIG/EDQUOT
-// to kDiskFull, but sqlite3_system_errno() does not carry EFBIG here; to investigate. Proposed fix in storage
-// (detail::throwSqlite): SQLITE_IOERR with sqlite3_system_errno() ENOSPC, EFBIG or EDQUOT is
-// ErrorCode::kDiskFull.
-TEST(DiskFull, DISABLED_FileSizeLimitIsReportedAsDiskFull) {
+// SQLite reports a write past RLIMIT_FSIZE as SQLITE_IOERR_WRITE with an unreliable errno: the user
+// must still hear "disk full".
+TEST(DiskFull, FileSizeLimitIsReportedAsDiskFull) {
   const auto map = scratchDir("DiskFullLimitCode") / "full.placedb";
   std::int64_t committed = 0;
   auto error = fillBySizeLimit(map, committed);
