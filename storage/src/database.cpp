@@ -160,6 +160,10 @@ std::vector<std::uint8_t> Statement::columnBlob(int column) const {
   const int size = sqlite3_column_bytes(stmt_, column);
   return data ? std::vector<std::uint8_t>(data, data + size) : std::vector<std::uint8_t>();
 }
+std::pair<const std::uint8_t*, std::size_t> Statement::columnBlobView(int column) const {
+  const auto* data = static_cast<const std::uint8_t*>(sqlite3_column_blob(stmt_, column));
+  return {data, data ? static_cast<std::size_t>(sqlite3_column_bytes(stmt_, column)) : 0};
+}
 std::optional<std::int64_t> Statement::columnOptionalInt(int column) const {
   if (isNull(column)) return std::nullopt;
   return columnInt(column);

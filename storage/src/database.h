@@ -44,6 +44,8 @@ class Statement {
   double columnDouble(int column) const;
   std::string columnText(int column) const;
   std::vector<std::uint8_t> columnBlob(int column) const;
+  // The blob in place, valid until the next step or reset: for bulk loads that copy it anyway.
+  std::pair<const std::uint8_t*, std::size_t> columnBlobView(int column) const;
   std::optional<std::int64_t> columnOptionalInt(int column) const;
   std::optional<double> columnOptionalDouble(int column) const;
 

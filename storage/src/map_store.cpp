@@ -124,6 +124,21 @@ void Transaction::rollback() {
   if (db->inTransaction()) db->exec("ROLLBACK");
 }
 
+ReadSnapshot::ReadSnapshot(detail::Database* db) : db_(db) {
+  if (db_->inTransaction()) {
+    db_ = nullptr;  // the open transaction already gives one snapshot
+    return;
+  }
+  db_->exec("BEGIN DEFERRED");
+}
+
+ReadSnapshot::ReadSnapshot(ReadSnapshot&& other) noexcept : db_(other.db_) { other.db_ = nullptr; }
+
+ReadSnapshot::~ReadSnapshot() {
+  // Nothing was written: ending it cannot lose data, and a destructor must not throw.
+  if (db_ && db_->inTransaction()) sqlite3_exec(db_->handle(), "COMMIT", nullptr, nullptr, nullptr);
+}
+
 // ---- Opening ----
 
 MapStore::MapStore(const std::string& path, OpenMode mode, const OpenOptions& options)
@@ -201,6 +216,8 @@ void MapStore::requireWritable() const {
     throw StorageError(ErrorCode::kReadOnly, "map " + path_ + " is open read-only");
   }
 }
+
+ReadSnapshot MapStore::readSnapshot() const { return ReadSnapshot(db_.get()); }
 
 Transaction MapStore::begin() {
   requireWritable();

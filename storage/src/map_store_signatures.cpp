@@ -1,5 +1,6 @@
 // MapStore: words, word references, links, hypotheses, engine state and vocabulary imports.
 #include <algorithm>
+#include <cstring>
 #include <set>
 
 #include "database.h"
@@ -59,6 +60,49 @@ std::vector<WordRecord> MapStore::loadWords(const std::vector<std::int64_t>& wor
     result.push_back(std::move(w));
   }
   return result;
+}
+
+void MapStore::loadFloatDescriptors(const std::vector<std::int64_t>& word_ids, int dim, float* rows,
+                                    std::int64_t* created) const {
+  if (!std::is_sorted(word_ids.begin(), word_ids.end()))
+    throw StorageError(ErrorCode::kInvalidArgument, "loadFloatDescriptors: ids must be sorted");
+  // Word ids rise with creation, and the words of working memory are mostly runs of recent ones:
+  // walking the table in id order and seeking again only across a gap costs far less than one
+  // B-tree descent per word.
+  constexpr int kMaxSkipped = 16;
+  auto s = db_->cached(
+      "SELECT id, created_frame, descriptor_type, dim, descriptor FROM words WHERE id >= ?1 "
+      "ORDER BY id");
+  const std::size_t row_bytes = static_cast<std::size_t>(dim) * sizeof(float);
+  auto missing = [&](std::int64_t id) {
+    return StorageError(ErrorCode::kMapRefused,
+                        "map " + path_ + ": word " + std::to_string(id) + " is missing");
+  };
+  std::size_t i = 0;
+  while (i < word_ids.size()) {
+    s->reset();
+    s->bind(1, word_ids[i]);
+    int skipped = 0;
+    while (i < word_ids.size() && skipped <= kMaxSkipped) {
+      if (!s->step()) throw missing(word_ids[i]);
+      const std::int64_t id = s->columnInt(0);
+      if (id < word_ids[i]) {
+        ++skipped;
+        continue;
+      }
+      if (id > word_ids[i]) throw missing(word_ids[i]);
+      const auto [data, size] = s->columnBlobView(4);
+      if (static_cast<DescriptorKind>(s->columnInt(2)) != DescriptorKind::kFloat32 ||
+          s->columnInt(3) != dim || size != row_bytes)
+        throw StorageError(ErrorCode::kMapRefused, "map " + path_ + ": word " + std::to_string(id) +
+                                                       " is not a float descriptor of dimension " +
+                                                       std::to_string(dim));
+      std::memcpy(rows + i * static_cast<std::size_t>(dim), data, row_bytes);
+      created[i] = s->isNull(1) ? -1 : s->columnInt(1);
+      ++i;
+      skipped = 0;
+    }
+  }
 }
 
 std::int64_t MapStore::wordCount() const {
@@ -131,6 +175,19 @@ std::map<std::int64_t, std::vector<WordRef>> MapStore::loadWordRefs(
     const std::vector<std::int64_t>& location_ids) const {
   std::map<std::int64_t, std::vector<WordRef>> result;
   for (std::int64_t id : location_ids) result[id] = loadWordRefs(id);
+  return result;
+}
+
+std::map<std::int64_t, std::vector<std::int64_t>> MapStore::loadWordIds(
+    const std::vector<std::int64_t>& location_ids) const {
+  auto s = db_->cached("SELECT word_id FROM word_refs WHERE location_id = ?1 ORDER BY ordinal");
+  std::map<std::int64_t, std::vector<std::int64_t>> result;
+  for (std::int64_t id : location_ids) {
+    s->reset();
+    s->bind(1, id);
+    auto& ids = result[id];
+    while (s->step()) ids.push_back(s->columnInt(0));
+  }
   return result;
 }
 

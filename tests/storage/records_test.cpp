@@ -217,6 +217,67 @@ TEST_F(Records, WordsAndReferences) {
   EXPECT_THROW(store_->insertWords({wrong_size}), Error);
 }
 
+// The bulk loads that restore working memory on open: descriptors straight into one matrix
+// (walking the table across short gaps, seeking across long ones) and bare signatures.
+TEST_F(Records, BulkDescriptorAndSignatureLoads) {
+  constexpr int kDim = 8;
+  auto value = [](std::int64_t id, int k) { return static_cast<float>(id) * 10.f + k; };
+  {
+    Transaction tx = store_->begin();
+    FrameRecord f = sampleFrame(0);
+    f.id = 1;
+    store_->insertFrame(f);
+    std::vector<WordRecord> words;
+    for (std::int64_t id = 1; id <= 200; ++id) {
+      std::vector<float> values(kDim);
+      for (int k = 0; k < kDim; ++k) values[k] = value(id, k);
+      words.push_back(WordRecord::fromFloats(
+          id, id % 2 ? std::optional<std::int64_t>(1) : std::nullopt, values.data(), kDim));
+    }
+    std::vector<float> wide(kDim + 1, 0.f);
+    words.push_back(WordRecord::fromFloats(300, std::nullopt, wide.data(), kDim + 1));
+    store_->insertWords(words);
+    store_->insertLocation({1, session_, 0, Tier::kWM, 1});
+    store_->insertLocation({2, session_, 0, Tier::kWM, 1});
+    store_->insertWordRefs(1, {{7, 0, 0, 1, 0, 1}, {3, 0, 0, 1, 0, 1}, {7, 0, 0, 1, 0, 1}});
+    store_->insertWordRefs(2, {{150, 0, 0, 1, 0, 1}});
+    tx.commit();
+  }
+  const auto snapshot = store_->readSnapshot();
+  // Neighbours, a gap of 2, gaps far beyond the walk's reach, and the last word.
+  const std::vector<std::int64_t> ids = {1, 2, 3, 6, 60, 61, 180, 200};
+  std::vector<float> rows(ids.size() * kDim, -1.f);
+  std::vector<std::int64_t> created(ids.size(), 99);
+  store_->loadFloatDescriptors(ids, kDim, rows.data(), created.data());
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    SCOPED_TRACE("word " + std::to_string(ids[i]));
+    for (int k = 0; k < kDim; ++k) EXPECT_EQ(rows[i * kDim + k], value(ids[i], k));
+    EXPECT_EQ(created[i], ids[i] % 2 ? 1 : -1);
+  }
+  store_->loadFloatDescriptors({}, kDim, nullptr, nullptr);  // nothing asked, nothing touched
+
+  auto code = [&](const std::vector<std::int64_t>& asked) {
+    std::vector<float> out(asked.size() * kDim);
+    std::vector<std::int64_t> made(asked.size());
+    try {
+      store_->loadFloatDescriptors(asked, kDim, out.data(), made.data());
+    } catch (const Error& e) {
+      return static_cast<int>(e.code());
+    }
+    return 0;  // no error
+  };
+  const int refused = static_cast<int>(ErrorCode::kMapRefused);
+  EXPECT_EQ(code({5, 201}), refused) << "a missing word past the end";
+  EXPECT_EQ(code({5, 250, 260}), refused) << "a missing word in a gap";
+  EXPECT_EQ(code({200, 300}), refused) << "another dimension";
+  EXPECT_EQ(code({6, 5}), static_cast<int>(ErrorCode::kInvalidArgument)) << "unsorted ids";
+
+  const auto signatures = store_->loadWordIds({1, 2, 3});
+  EXPECT_EQ(signatures.at(1), (std::vector<std::int64_t>{7, 3, 7})) << "insertion order, repeats";
+  EXPECT_EQ(signatures.at(2), (std::vector<std::int64_t>{150}));
+  EXPECT_TRUE(signatures.at(3).empty());
+}
+
 TEST_F(Records, LinksStoredOncePerPairAndType) {
   store_->insertFrame([&] {
     auto f = sampleFrame(0);

@@ -60,6 +60,7 @@ void MapImpl::configure(const Options& options) {
 }
 
 void MapImpl::restoreFromStore() {
+  const auto snapshot_of_file = store_->readSnapshot();
   counters_ = EngineCounters();
   counters_.load(*store_);
 
@@ -83,14 +84,16 @@ void MapImpl::restoreFromStore() {
   tiers_->restore(snapshot);
 
   // Signatures of STM and WM, and the words they reference.
-  std::set<std::int64_t> words;
-  auto refs = store_->loadWordRefs(live);
-  for (std::int64_t id : live) {
-    std::vector<WordId> ids;
-    for (const auto& r : refs[id]) ids.push_back(r.word_id);
-    words.insert(ids.begin(), ids.end());
-    index_.add(id, Signature::fromWords(std::move(ids)));
+  std::vector<std::int64_t> word_ids;
+  {
+    auto signatures = store_->loadWordIds(live);
+    for (std::int64_t id : live) {
+      word_ids.insert(word_ids.end(), signatures[id].begin(), signatures[id].end());
+      index_.add(id, Signature::fromWords(std::move(signatures[id])));
+    }
   }
+  std::sort(word_ids.begin(), word_ids.end());
+  word_ids.erase(std::unique(word_ids.begin(), word_ids.end()), word_ids.end());
   auto state = vocabulary_state_.load(*store_);
   if (state && state->kd_trees != options_.kd_trees)
     throw Error(ErrorCode::kInvalidArgument,
@@ -98,24 +101,10 @@ void MapImpl::restoreFromStore() {
                             "(the setting is fixed when a map is made)",
                             store_->path(), state->kd_trees, options_.kd_trees));
   if (state) {
-    std::vector<std::int64_t> word_ids(words.begin(), words.end());
-    auto records = store_->loadWords(word_ids);
-    if (records.size() != word_ids.size())
-      throw Error(ErrorCode::kMapRefused,
-                  fmt::format("{}: {} words referenced by working memory are missing",
-                              store_->path(), word_ids.size() - records.size()));
-    cv::Mat descriptors(static_cast<int>(records.size()), extractor_->dim(), CV_32F);
-    std::vector<std::int64_t> created(records.size());
-    for (std::size_t i = 0; i < records.size(); ++i) {
-      const auto& r = records[i];
-      if (r.dim != extractor_->dim() || r.type != storage::DescriptorKind::kFloat32)
-        throw Error(ErrorCode::kMapRefused,
-                    fmt::format("{}: word {} has dimension {}, the extractor gives {}",
-                                store_->path(), r.id, r.dim, extractor_->dim()));
-      std::memcpy(descriptors.ptr<float>(static_cast<int>(i)), r.descriptor.data(),
-                  r.descriptor.size());
-      created[i] = r.created_frame.value_or(-1);
-    }
+    cv::Mat descriptors(static_cast<int>(word_ids.size()), extractor_->dim(), CV_32F);
+    std::vector<std::int64_t> created(word_ids.size());
+    store_->loadFloatDescriptors(word_ids, extractor_->dim(), descriptors.ptr<float>(),
+                                 created.data());
     try {
       vocabulary_->restore(*state, word_ids, descriptors, created);
     } catch (const Error& e) {
@@ -123,7 +112,7 @@ void MapImpl::restoreFromStore() {
       if (e.code() != ErrorCode::kInvalidArgument) throw;
       throw Error(ErrorCode::kMapRefused, store_->path() + ": " + e.what());
     }
-  } else if (!words.empty()) {
+  } else if (!word_ids.empty()) {
     throw Error(ErrorCode::kMapRefused,
                 store_->path() + ": working memory has words but the vocabulary state is missing");
   }

@@ -5,6 +5,7 @@
 #include <limits>
 #include <queue>
 #include <string>
+#include <thread>
 
 #include "placedb/error.h"
 
@@ -66,16 +67,47 @@ std::int32_t KdForest::leafOf(const Tree& tree, const float* v) const {
   return node;
 }
 
-void KdForest::insertImpl(std::uint32_t slot, bool may_split) {
+void KdForest::insert(std::uint32_t slot) {
   if (seen_.size() < store_->slotCount()) seen_.resize(store_->slotCount(), 0);
   const float* v = store_->data(slot);
   for (std::uint32_t t = 0; t < trees_.size(); ++t) {
     const std::int32_t leaf = leafOf(trees_[t], v);
     trees_[t].nodes[leaf].bucket.push_back(slot);
-    if (may_split && trees_[t].nodes[leaf].bucket.size() > std::size_t(leaf_size_)) {
-      trySplit(t, leaf);
-    }
+    if (trees_[t].nodes[leaf].bucket.size() > std::size_t(leaf_size_)) trySplit(t, leaf);
   }
+}
+
+void KdForest::insertAllWithoutSplitting(const std::vector<std::uint32_t>& slots) {
+  if (seen_.size() < store_->slotCount()) seen_.resize(store_->slotCount(), 0);
+  auto fill = [&](Tree& tree) {
+    // Routing is the cost (a walk down a deep tree per point); doing it once per point and
+    // sizing the buckets first spares the reallocations of growing them one point at a time.
+    std::vector<std::int32_t> leaf(slots.size());
+    std::vector<std::uint32_t> added(tree.nodes.size(), 0);
+    for (std::size_t i = 0; i < slots.size(); ++i) {
+      leaf[i] = leafOf(tree, store_->data(slots[i]));
+      ++added[static_cast<std::size_t>(leaf[i])];
+    }
+    for (std::size_t n = 0; n < added.size(); ++n)
+      if (added[n]) tree.nodes[n].bucket.reserve(tree.nodes[n].bucket.size() + added[n]);
+    for (std::size_t i = 0; i < slots.size(); ++i)
+      tree.nodes[static_cast<std::size_t>(leaf[i])].bucket.push_back(slots[i]);
+  };
+  // Trees share nothing but the read-only descriptors, so they fill in parallel; each tree's
+  // buckets get their points in the given order whatever the scheduling.
+  const std::size_t workers =
+      std::min<std::size_t>(trees_.size(), std::max(1u, std::thread::hardware_concurrency()));
+  if (workers <= 1 || slots.size() < 4096) {
+    for (Tree& tree : trees_) fill(tree);
+    return;
+  }
+  std::vector<std::thread> threads;
+  for (std::size_t w = 1; w < workers; ++w)
+    threads.emplace_back([&, w] {
+      for (std::size_t t = w; t < trees_.size(); t += workers) fill(trees_[t]);
+    });
+  for (std::size_t t = 0; t < trees_.size(); t += workers) fill(trees_[t]);
+  for (auto& thread : threads) thread.join();
 }
 
 void KdForest::remove(std::uint32_t slot) {
@@ -144,6 +176,13 @@ void KdForest::applySplit(std::uint32_t tree_index, std::int32_t node_index, std
 }
 
 void KdForest::replaySplits(const std::vector<SplitRecord>& log) {
+  // Every split adds two nodes: sizing the node arrays first spares moving them as they grow.
+  std::vector<std::size_t> added(trees_.size(), 0);
+  for (const SplitRecord& s : log)
+    if (s.tree < trees_.size()) added[s.tree] += 2;
+  for (std::size_t t = 0; t < trees_.size(); ++t)
+    trees_[t].nodes.reserve(trees_[t].nodes.size() + added[t]);
+  splits_.reserve(splits_.size() + log.size());
   for (const SplitRecord& s : log) {
     if (s.tree >= trees_.size() || s.node >= trees_[s.tree].nodes.size() ||
         trees_[s.tree].nodes[s.node].left >= 0 || s.dim >= dim_) {

@@ -12,7 +12,7 @@
 // call costs more than routing its points down the trees.
 //
 // Persisting the forest only needs its split log (append-only) and the set of live points:
-// replaySplits() + insertWithoutSplitting() of the live points rebuild the same trees with the
+// replaySplits() + insertAllWithoutSplitting() of the live points rebuild the same trees with the
 // same bucket contents. Search results never depend on the order inside a bucket (whole buckets
 // are examined; ties on distance go to the smaller word id).
 #include <cstdint>
@@ -49,9 +49,10 @@ class KdForest {
  public:
   KdForest(const SlotStore* store, int trees, int leaf_size, std::uint64_t seed);
 
-  void insert(std::uint32_t slot) { insertImpl(slot, true); }
-  // Used by restore: the split log already holds every split the live points caused.
-  void insertWithoutSplitting(std::uint32_t slot) { insertImpl(slot, false); }
+  void insert(std::uint32_t slot);
+  // Used by restore: the split log already holds every split the live points caused, so the
+  // points only go to their buckets, in the given order. Trees fill in parallel.
+  void insertAllWithoutSplitting(const std::vector<std::uint32_t>& slots);
   // The slot's descriptor must still be in the store: removal routes it to its bucket.
   void remove(std::uint32_t slot);
 
@@ -87,7 +88,6 @@ class KdForest {
     }
   };
 
-  void insertImpl(std::uint32_t slot, bool may_split);
   std::int32_t leafOf(const Tree& tree, const float* v) const;
   void trySplit(std::uint32_t tree_index, std::int32_t node_index);
   void applySplit(std::uint32_t tree_index, std::int32_t node_index, std::uint16_t dim,

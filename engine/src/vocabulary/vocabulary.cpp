@@ -91,15 +91,10 @@ bool Vocabulary::decideNewWord(const std::vector<Neighbor>& best) const {
   return nd > options_.t_nndr * inUnit(best[1].dist2);
 }
 
-void Vocabulary::addWord(std::int64_t id, std::int64_t created_frame, const float* descriptor,
-                         bool split) {
+void Vocabulary::addWord(std::int64_t id, std::int64_t created_frame, const float* descriptor) {
   const std::uint32_t slot = store_.add(id, created_frame, descriptor);
   slot_of_.set(id, slot);
-  if (split) {
-    forest_->insert(slot);
-  } else {
-    forest_->insertWithoutSplitting(slot);
-  }
+  forest_->insert(slot);
 }
 
 Quantization Vocabulary::quantize(const cv::Mat& descriptors, std::int64_t frame_id) {
@@ -165,7 +160,7 @@ Quantization Vocabulary::quantize(const cv::Mat& descriptors, std::int64_t frame
     }
   }
   for (std::size_t w = 0; w < created_rows.size(); ++w) {
-    addWord(q.created_words[w], frame_id, row(created_rows[w]), true);
+    addWord(q.created_words[w], frame_id, row(created_rows[w]));
   }
   double sum = 0;
   for (float d : q.distance_of_feature) sum += d;
@@ -187,7 +182,7 @@ void Vocabulary::insert(const std::vector<std::int64_t>& ids, const cv::Mat& des
   touched_ = true;
   const cv::Mat rows = descriptors.isContinuous() ? descriptors : descriptors.clone();
   for (std::size_t i = 0; i < ids.size(); ++i) {
-    addWord(ids[i], created_frames[i], rows.ptr<float>(int(i)), true);
+    addWord(ids[i], created_frames[i], rows.ptr<float>(int(i)));
     next_word_id_ = std::max(next_word_id_, ids[i] + 1);
   }
 }
@@ -262,12 +257,16 @@ void Vocabulary::restore(const IndexState& state, const std::vector<std::int64_t
   touched_ = true;
   const cv::Mat rows = descriptors.isContinuous() ? descriptors : descriptors.clone();
   std::int64_t max_id = -1;
+  std::vector<std::uint32_t> slots;
+  slots.reserve(ids.size());
   for (std::size_t i = 0; i < ids.size(); ++i) {
     require(ids[i] >= 0 && !contains(ids[i]),
             "restore: word " + std::to_string(ids[i]) + " negative or given twice");
-    addWord(ids[i], created_frames[i], rows.ptr<float>(int(i)), false);
+    slots.push_back(store_.add(ids[i], created_frames[i], rows.ptr<float>(int(i))));
+    slot_of_.set(ids[i], slots.back());
     max_id = std::max(max_id, ids[i]);
   }
+  forest_->insertAllWithoutSplitting(slots);
   require(max_id < state.next_word_id, "restore: a word id is beyond the state's next word id");
   next_word_id_ = state.next_word_id;
 }

@@ -133,7 +133,7 @@ class Vocabulary {
 
  private:
   void checkDescriptors(const cv::Mat& descriptors, const char* what) const;
-  void addWord(std::int64_t id, std::int64_t created_frame, const float* descriptor, bool split);
+  void addWord(std::int64_t id, std::int64_t created_frame, const float* descriptor);
   bool decideNewWord(const std::vector<Neighbor>& best) const;
   float inUnit(float dist2) const;
 

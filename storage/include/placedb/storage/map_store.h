@@ -51,6 +51,23 @@ class Transaction {
   detail::Database* db_;
 };
 
+// A read transaction (BEGIN DEFERRED): many reads see one snapshot and share one lock, instead
+// of taking and dropping a read lock per statement. Ends on destruction; no-op when the
+// connection is already inside a transaction.
+class ReadSnapshot {
+ public:
+  ReadSnapshot(ReadSnapshot&& other) noexcept;
+  ReadSnapshot& operator=(ReadSnapshot&&) = delete;
+  ReadSnapshot(const ReadSnapshot&) = delete;
+  ReadSnapshot& operator=(const ReadSnapshot&) = delete;
+  ~ReadSnapshot();
+
+ private:
+  friend class MapStore;
+  explicit ReadSnapshot(detail::Database* db);
+  detail::Database* db_;
+};
+
 class MapStore {
  public:
   MapStore(const std::string& path, OpenMode mode, const OpenOptions& options = {});
@@ -65,6 +82,8 @@ class MapStore {
 
   // One per processed frame: everything written for the frame commits together.
   Transaction begin();
+  // For loading many rows at once (restoring memory on open), also on a read-only map.
+  ReadSnapshot readSnapshot() const;
 
   // Sessions.
   std::int64_t beginSession(const std::string& source,
@@ -105,6 +124,11 @@ class MapStore {
   void insertWords(const std::vector<WordRecord>& words);
   // The words found, in the order asked; unknown ids are skipped.
   std::vector<WordRecord> loadWords(const std::vector<std::int64_t>& word_ids) const;
+  // Bulk form for loading an index: word_ids[i]'s float32 descriptor of `dim` values goes to row
+  // i of `rows` (word_ids.size() x dim, contiguous) and its creating frame (or -1) to
+  // created[i]. A word that is missing, or of another type or dimension, is kMapRefused.
+  void loadFloatDescriptors(const std::vector<std::int64_t>& word_ids, int dim, float* rows,
+                            std::int64_t* created) const;
   std::int64_t wordCount() const;
   std::optional<std::int64_t> maxWordId() const;
 
@@ -113,6 +137,9 @@ class MapStore {
   void replaceWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs);
   std::vector<WordRef> loadWordRefs(std::int64_t location_id) const;
   std::map<std::int64_t, std::vector<WordRef>> loadWordRefs(
+      const std::vector<std::int64_t>& location_ids) const;
+  // Only the word ids of each location's references, in order: a signature without keypoints.
+  std::map<std::int64_t, std::vector<std::int64_t>> loadWordIds(
       const std::vector<std::int64_t>& location_ids) const;
   std::vector<std::int64_t> wordsOfLocations(const std::vector<std::int64_t>& location_ids) const;
   // The inverted index: locations whose signature holds the word, ascending.
