@@ -63,7 +63,9 @@ const std::vector<std::string>& FrameLogWriter::columns() {
                                                     "session",
                                                     "other_candidates",
                                                     "rejected_reason",
-                                                    "raw_score"};
+                                                    "raw_score",
+                                                    "inliers",
+                                                    "matches"};
   return kColumns;
 }
 
@@ -121,7 +123,9 @@ void FrameLogWriter::write(const FrameResult& r) {
                                      std::to_string(r.session_id),
                                      other_sessions,
                                      csvField(r.hypothesis.rejected_reason),
-                                     number(r.hypothesis.score)};
+                                     number(r.hypothesis.score),
+                                     std::to_string(r.hypothesis.inliers),
+                                     std::to_string(r.hypothesis.matches)};
   if (fields.size() != columns().size())
     throw Error(ErrorCode::kInternal, "frame log: fields and columns differ");
   std::string row;

@@ -44,6 +44,8 @@ struct Hypothesis {
   double score = 0;               // loop-closure probability, 1 - p(new place)
   bool accepted = false;
   std::string rejected_reason;    // why it was not accepted; empty when accepted
+  int inliers = 0;                // the geometric check's epipolar inliers (0: no check ran)
+  int matches = 0;                // ... among this many descriptor matches
 };
 
 struct FrameResult {

@@ -174,6 +174,8 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
   if (has_hypothesis) {
     r.hypothesis.location_id = hypothesis;
     r.hypothesis.posterior = filter_->posteriorOf(hypothesis);
+    r.hypothesis.inliers = verified.inliers;
+    r.hypothesis.matches = verified.matches;
     r.hypothesis.accepted = outcome.accepted && verified.passed;
     // EVALUATION.md: the score is 0 where a check other than the final threshold rejected it.
     const bool vetoed = !verified.passed || outcome.reason == RejectReason::kRatioTest;
