@@ -1,4 +1,4 @@
--- placedb map schema: the current version (1), as one file.
+-- placedb map schema: the current version (2), as one file.
 -- It must equal the result of applying migrations/0001..N in order; a test compares
 -- sqlite_master of both. `sqlite3 new.db < schema/schema.sql` makes an empty placedb map.
 -- See schema/SCHEMA.md for the meaning of every table, column and view.
@@ -73,7 +73,10 @@ CREATE TABLE vocabulary_imports (
   checksum TEXT NOT NULL,
   word_count INTEGER NOT NULL,
   mode TEXT NOT NULL CHECK (mode IN ('fixed', 'seed')),
-  imported_at TEXT NOT NULL          -- ISO 8601 UTC
+  imported_at TEXT NOT NULL,         -- ISO 8601 UTC
+  extractor TEXT,                    -- as the file's header names them (schema 2)
+  distance_unit TEXT,
+  settings TEXT                      -- JSON object, key -> value
 );
 
 -- Visual words. descriptor holds dim values of the given type, little-endian.
@@ -84,7 +87,8 @@ CREATE TABLE words (
   descriptor_type INTEGER NOT NULL CHECK (descriptor_type IN (0, 1)),  -- 0 float32, 1 uint8
   dim INTEGER NOT NULL CHECK (dim > 0),
   descriptor BLOB NOT NULL
-    CHECK (length(descriptor) = dim * (CASE descriptor_type WHEN 0 THEN 4 ELSE 1 END))
+    CHECK (length(descriptor) = dim * (CASE descriptor_type WHEN 0 THEN 4 ELSE 1 END)),
+  source_frame INTEGER               -- imported words: creating frame in their source map
 );
 CREATE INDEX words_by_created_frame ON words (created_frame);
 
@@ -188,5 +192,5 @@ FROM frames f;
 
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 1;
+PRAGMA user_version = 2;
 COMMIT;

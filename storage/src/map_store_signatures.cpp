@@ -3,6 +3,8 @@
 #include <cstring>
 #include <set>
 
+#include <nlohmann/json.hpp>
+
 #include "database.h"
 #include "placedb/storage/map_store.h"
 #include "write_scope.h"
@@ -20,7 +22,7 @@ void MapStore::insertWords(const std::vector<WordRecord>& words) {
   WriteScope scope(*this);
   auto s = db_->cached(
       "INSERT INTO words (id, created_frame, vocabulary_import_id, descriptor_type, dim, "
-      "descriptor) VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+      "descriptor, source_frame) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
   for (const WordRecord& w : words) {
     if (w.dim <= 0 ||
         w.descriptor.size() != static_cast<std::size_t>(w.dim) * bytesPerValue(w.type)) {
@@ -35,6 +37,7 @@ void MapStore::insertWords(const std::vector<WordRecord>& words) {
     s->bind(4, std::int64_t{static_cast<int>(w.type)});
     s->bind(5, std::int64_t{w.dim});
     s->bindBlob(6, w.descriptor.data(), w.descriptor.size());
+    s->bind(7, w.source_frame);
     s->run();
   }
   scope.commit();
@@ -42,8 +45,8 @@ void MapStore::insertWords(const std::vector<WordRecord>& words) {
 
 std::vector<WordRecord> MapStore::loadWords(const std::vector<std::int64_t>& word_ids) const {
   auto s = db_->cached(
-      "SELECT id, created_frame, vocabulary_import_id, descriptor_type, dim, descriptor "
-      "FROM words WHERE id = ?1");
+      "SELECT id, created_frame, vocabulary_import_id, descriptor_type, dim, descriptor, "
+      "source_frame FROM words WHERE id = ?1");
   std::vector<WordRecord> result;
   result.reserve(word_ids.size());
   for (std::int64_t id : word_ids) {
@@ -57,6 +60,7 @@ std::vector<WordRecord> MapStore::loadWords(const std::vector<std::int64_t>& wor
     w.type = static_cast<DescriptorKind>(s->columnInt(3));
     w.dim = static_cast<int>(s->columnInt(4));
     w.descriptor = s->columnBlob(5);
+    w.source_frame = s->columnOptionalInt(6);
     result.push_back(std::move(w));
   }
   return result;
@@ -189,6 +193,13 @@ std::map<std::int64_t, std::vector<std::int64_t>> MapStore::loadWordIds(
     while (s->step()) ids.push_back(s->columnInt(0));
   }
   return result;
+}
+
+std::vector<std::int64_t> MapStore::importedWordIds() const {
+  auto s = db_->cached("SELECT id FROM words WHERE vocabulary_import_id IS NOT NULL ORDER BY id");
+  std::vector<std::int64_t> ids;
+  while (s->step()) ids.push_back(s->columnInt(0));
+  return ids;
 }
 
 std::vector<std::int64_t> MapStore::wordsOfLocations(
@@ -355,14 +366,19 @@ std::vector<std::pair<std::int64_t, double>> MapStore::loadPosterior() const {
 std::int64_t MapStore::recordVocabularyImport(const VocabularyImportRecord& v) {
   WriteScope scope(*this);
   auto s = db_->cached(
-      "INSERT INTO vocabulary_imports (session_id, file, checksum, word_count, mode, imported_at) "
-      "VALUES (?1, ?2, ?3, ?4, ?5, coalesce(?6, strftime('%Y-%m-%dT%H:%M:%fZ', 'now')))");
+      "INSERT INTO vocabulary_imports (session_id, file, checksum, word_count, mode, imported_at, "
+      "extractor, distance_unit, settings) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, coalesce(?6, strftime('%Y-%m-%dT%H:%M:%fZ', 'now')), ?7, ?8, "
+      "?9)");
   s->bind(1, v.session_id);
   s->bind(2, v.file);
   s->bind(3, v.checksum);
   s->bind(4, v.word_count);
   s->bind(5, std::string(v.mode == VocabularyMode::kFixed ? "fixed" : "seed"));
   if (!v.imported_at.empty()) s->bind(6, v.imported_at);
+  s->bind(7, v.extractor);
+  s->bind(8, v.distance_unit);
+  s->bind(9, nlohmann::json(v.settings).dump());
   s->run();
   const std::int64_t id = sqlite3_last_insert_rowid(db_->handle());
   scope.commit();
@@ -371,7 +387,8 @@ std::int64_t MapStore::recordVocabularyImport(const VocabularyImportRecord& v) {
 
 std::vector<VocabularyImportRecord> MapStore::vocabularyImports() const {
   auto s = db_->cached(
-      "SELECT id, session_id, file, checksum, word_count, mode, imported_at "
+      "SELECT id, session_id, file, checksum, word_count, mode, imported_at, "
+      "coalesce(extractor, ''), coalesce(distance_unit, ''), settings "
       "FROM vocabulary_imports ORDER BY id");
   std::vector<VocabularyImportRecord> result;
   while (s->step()) {
@@ -383,6 +400,17 @@ std::vector<VocabularyImportRecord> MapStore::vocabularyImports() const {
     v.word_count = s->columnInt(4);
     v.mode = s->columnText(5) == "fixed" ? VocabularyMode::kFixed : VocabularyMode::kSeed;
     v.imported_at = s->columnText(6);
+    v.extractor = s->columnText(7);
+    v.distance_unit = s->columnText(8);
+    if (!s->isNull(9)) {
+      const auto settings = nlohmann::json::parse(s->columnText(9), nullptr, false);
+      if (!settings.is_object())
+        throw StorageError(ErrorCode::kMapRefused, "map " + path_ + ": vocabulary import " +
+                                                       std::to_string(v.id) +
+                                                       " has damaged settings (not a JSON object)");
+      for (const auto& [key, value] : settings.items())
+        if (value.is_string()) v.settings[key] = value.get<std::string>();
+    }
     result.push_back(std::move(v));
   }
   return result;

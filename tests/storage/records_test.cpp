@@ -357,6 +357,9 @@ TEST_F(Records, HypothesesStateAndVocabularyImports) {
   import.checksum = "sha256:abc";
   import.word_count = 10000;
   import.mode = VocabularyMode::kSeed;
+  import.extractor = "surf";
+  import.distance_unit = "squared";
+  import.settings = {{"t_nd2", "0.08"}, { "quote\"key", "line\nbreak" }};
   const auto import_id = store_->recordVocabularyImport(import);
   import.mode = VocabularyMode::kFixed;
   import.imported_at = "2026-01-02T03:04:05.000Z";
@@ -370,12 +373,21 @@ TEST_F(Records, HypothesesStateAndVocabularyImports) {
   EXPECT_FALSE(imports[0].imported_at.empty());
   EXPECT_EQ(imports[1].mode, VocabularyMode::kFixed);
   EXPECT_EQ(imports[1].imported_at, "2026-01-02T03:04:05.000Z");
+  EXPECT_EQ(imports[0].extractor, "surf");
+  EXPECT_EQ(imports[0].distance_unit, "squared");
+  EXPECT_EQ(imports[0].settings, import.settings) << "settings survive as a JSON object";
 
   // A word of an imported vocabulary has no creating frame.
   WordRecord word = WordRecord::fromFloats(1, std::nullopt, std::vector<float>(4, 1).data(), 4);
   word.vocabulary_import_id = import_id;
-  store_->insertWords({word});
-  EXPECT_EQ(store_->loadWords({1})[0].vocabulary_import_id, import_id);
+  word.source_frame = 4321;  // its frame in the map it was exported from
+  WordRecord own = WordRecord::fromFloats(2, std::nullopt, std::vector<float>(4, 2).data(), 4);
+  store_->insertWords({word, own});
+  const auto loaded = store_->loadWords({1, 2});
+  EXPECT_EQ(loaded[0].vocabulary_import_id, import_id);
+  EXPECT_EQ(loaded[0].source_frame, 4321);
+  EXPECT_FALSE(loaded[1].source_frame);
+  EXPECT_EQ(store_->importedWordIds(), (std::vector<std::int64_t>{1}));
 }
 
 TEST_F(Records, ForeignKeysAreEnforced) {

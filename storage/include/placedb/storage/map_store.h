@@ -131,6 +131,8 @@ class MapStore {
                             std::int64_t* created) const;
   std::int64_t wordCount() const;
   std::optional<std::int64_t> maxWordId() const;
+  // Words of imported vocabularies, ascending: they stay in the index whatever the tiers do.
+  std::vector<std::int64_t> importedWordIds() const;
 
   // Word references: a location's signature, kept in insertion order.
   void insertWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs);

@@ -1,6 +1,7 @@
 #pragma once
 // Plain records exchanged between the engine and the map database. Ids are SQLite integers.
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -64,6 +65,7 @@ struct WordRecord {
   DescriptorKind type = DescriptorKind::kFloat32;
   int dim = 0;
   std::vector<std::uint8_t> descriptor;  // dim values of `type`, little-endian
+  std::optional<std::int64_t> source_frame;  // imported words: creating frame in the source map
 
   static WordRecord fromFloats(std::int64_t id, std::optional<std::int64_t> created_frame,
                                const float* values, int dim);
@@ -100,6 +102,10 @@ struct VocabularyImportRecord {
   std::int64_t word_count = 0;
   VocabularyMode mode = VocabularyMode::kFixed;
   std::string imported_at;  // ISO 8601 UTC, set by the database when empty
+  // What the file's header said (schema 2); empty for imports recorded before.
+  std::string extractor;
+  std::string distance_unit;
+  std::map<std::string, std::string> settings;
 };
 
 }  // namespace placedb::storage
