@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
@@ -233,16 +234,46 @@ TEST(CliSyntheticSequence, VocabularyExport) {
   std::int64_t lines = 0;
   for (std::string line; std::getline(in, line);) lines += line.empty() ? 0 : 1;
   EXPECT_EQ(lines, words);
-  // Import is not wired yet: a valid file is still checked, a damaged one refused with code 8.
-  auto import = placedb({"vocab", "import", (dir / "words.pvoc").string(),
-                         (dir / "new.placedb").string(), "--mode", "fixed"},
-                        dir);
-  expectCleanError(import, 2, "not available yet");
+
+  // Export -> import -> export gives the same file, byte for byte, in both forms.
+  auto fileOf = [](const fs::path& p) {
+    std::ifstream f(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+  };
+  const auto imported = (dir / "imported.placedb").string();
+  auto import =
+      placedb({"vocab", "import", (dir / "words.pvoc").string(), imported, "--mode", "fixed"}, dir);
+  ASSERT_EQ(import.exit_code, 0) << describe(import);
+  EXPECT_EQ(info(fs::path(imported), dir)["words"], words);
+  ASSERT_EQ(placedb({"vocab", "export", imported, (dir / "again.pvoc").string()}, dir).exit_code,
+            0);
+  EXPECT_EQ(fileOf(dir / "again.pvoc"), fileOf(dir / "words.pvoc"));
+  const auto from_text = (dir / "from_text.placedb").string();
+  ASSERT_EQ(placedb({"vocab", "import", (dir / "words.txt").string(), from_text, "--mode", "seed",
+                     "--text"},
+                    dir)
+                .exit_code,
+            0);
+  ASSERT_EQ(placedb({"vocab", "export", from_text, (dir / "again.txt").string(), "--text"}, dir)
+                .exit_code,
+            0);
+  EXPECT_EQ(fileOf(dir / "again.txt"), fileOf(dir / "words.txt"));
+
+  // The fixed map maps the rest of the sequence without a new word.
+  auto rest = placedb({"map", imported, (seq / "frames.txt").string(), "-q"}, dir);
+  ASSERT_EQ(rest.exit_code, 0) << describe(rest);
+  EXPECT_EQ(info(fs::path(imported), dir)["words"], words);
+
+  // Refusals: a damaged file (8, and no map left behind), a map that already has frames (2).
   std::ofstream(dir / "junk.pvoc") << "definitely not a vocabulary file";
   expectCleanError(placedb({"vocab", "import", (dir / "junk.pvoc").string(),
                             (dir / "new.placedb").string(), "--mode", "seed"},
                            dir),
                    8);
+  EXPECT_FALSE(fs::exists(dir / "new.placedb"));
+  expectCleanError(
+      placedb({"vocab", "import", (dir / "words.pvoc").string(), map, "--mode", "seed"}, dir), 2,
+      "new map only");
 }
 
 TEST(CliSyntheticSequence, SettingsAreStoredAndKeptOnResume) {

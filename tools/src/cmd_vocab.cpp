@@ -6,6 +6,7 @@
 
 #include "commands.h"
 #include "placedb/error.h"
+#include "placedb/map.h"
 #include "placedb/storage/map_store.h"
 #include "vocabulary/vocabulary_file.h"
 
@@ -13,7 +14,7 @@ namespace placedb::cli {
 namespace {
 
 struct VocabRequest {
-  std::string map_path, file, mode = "fixed";
+  std::string map_path, file, mode = "fixed", extractor;
   bool text = false;
 };
 
@@ -23,16 +24,26 @@ vocab::VocabularyData wordsOfMap(const std::string& map_path) {
   if (!std::filesystem::exists(map_path))
     throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", map_path));
   storage::MapStore store(map_path, storage::OpenMode::kReadOnly);
-  auto last = store.lastSession();
-  if (!last)
-    throw Error(ErrorCode::kInvalidArgument, fmt::format("map {} has no session", map_path));
   vocab::VocabularyData data;
-  data.settings = store.settings(last->id);
-  data.extractor = data.settings.count("extractor") ? data.settings.at("extractor") : "surf";
-  data.unit =
-      data.settings.count("distance_unit") && data.settings.at("distance_unit") == "euclidean"
-          ? vocab::DistanceUnit::kEuclidean
-          : vocab::DistanceUnit::kSquared;
+  auto last = store.lastSession();
+  const auto imports = store.vocabularyImports();
+  if (last) {
+    data.settings = store.settings(last->id);
+    data.extractor = data.settings.count("extractor") ? data.settings.at("extractor") : "surf";
+    data.unit =
+        data.settings.count("distance_unit") && data.settings.at("distance_unit") == "euclidean"
+            ? vocab::DistanceUnit::kEuclidean
+            : vocab::DistanceUnit::kSquared;
+  } else if (!imports.empty() && !imports.front().extractor.empty()) {
+    // Only imported words: the file's own header again, so the export repeats it exactly.
+    data.settings = imports.front().settings;
+    data.extractor = imports.front().extractor;
+    data.unit = imports.front().distance_unit == "euclidean" ? vocab::DistanceUnit::kEuclidean
+                                                             : vocab::DistanceUnit::kSquared;
+  } else {
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("map {} has no session and no imported vocabulary", map_path));
+  }
   data.type = DescriptorType::kFloat32;
 
   std::vector<std::vector<float>> rows;
@@ -50,7 +61,7 @@ vocab::VocabularyData wordsOfMap(const std::string& map_path) {
         throw Error(ErrorCode::kInternal, fmt::format("word {} has dimension {}, others {}",
                                                       word.id, word.dim, data.dim));
       data.ids.push_back(word.id);
-      data.created_frames.push_back(word.created_frame.value_or(-1));
+      data.created_frames.push_back(word.created_frame.value_or(word.source_frame.value_or(-1)));
       rows.push_back(word.floats());
     }
   }
@@ -78,13 +89,39 @@ int runImport(const VocabRequest& request) {
   if (request.mode != "fixed" && request.mode != "seed")
     throw Error(ErrorCode::kInvalidArgument,
                 fmt::format("--mode {} is not valid (valid: fixed|seed)", request.mode));
-  // Validate the file now, so a bad file is refused with its reason even before import exists.
+  // The file is checked before a map is created for it: a refused file leaves no map behind.
   vocab::VocabularyData data = request.text ? vocab::readVocabularyText(request.file)
                                             : vocab::readVocabularyFile(request.file);
-  throw Error(ErrorCode::kInvalidArgument,
-              fmt::format("vocab import is not available yet: {} holds {} valid words, but the "
-                          "engine cannot load imported words into a map",
-                          request.file, data.ids.size()));
+  Options options;
+  // The map takes the extractor that made the words ("surf" or its signature "surf-64").
+  const std::string named =
+      request.text ? (request.extractor.empty() ? Options().extractor : request.extractor)
+                   : data.extractor;
+  options.extractor = named.substr(0, named.find('-'));
+  if (!request.extractor.empty() && request.extractor != options.extractor)
+    throw Error(ErrorCode::kVocabularyRefused,
+                fmt::format("vocabulary file {} refused: its words are {} descriptors, not {}",
+                            request.file, named, request.extractor));
+  const bool created = !std::filesystem::exists(request.map_path);
+  std::size_t words = 0;
+  try {
+    auto map = Map::open(request.map_path, options);
+    words = map->importVocabulary(
+        request.file, request.text,
+        request.mode == "fixed" ? VocabularyMode::kFixed : VocabularyMode::kSeed);
+    map->close();
+  } catch (...) {
+    if (created)
+      for (const char* suffix : {"", "-wal", "-shm", "-lock"})
+        std::filesystem::remove(request.map_path + suffix);
+    throw;
+  }
+  std::fputs(fmt::format("placedb: imported {} words ({}, dimension {}) into {} as a {} "
+                         "vocabulary\n",
+                         words, options.extractor, data.dim, request.map_path, request.mode)
+                 .c_str(),
+             stderr);
+  return 0;
 }
 
 }  // namespace
@@ -111,6 +148,15 @@ Command addVocabCommand(CLI::App& parent) {
                    "fixed: only these words, none created; seed: start from them")
       ->required();
   importer->add_flag("--text", request->text, "FILE is in the text form");
+  importer->add_option("--extractor", request->extractor,
+                       "the extractor that made the words (text files only; default surf)");
+  importer->footer(
+      "MAP must be new (created here) or hold no frames and no words. The file is checked\n"
+      "whole first: wrong magic, version, checksum, dimension or extractor, or a truncated\n"
+      "file, is refused with its reason and nothing is written.\n\n"
+      "  fixed  every later frame takes its nearest imported word; the vocabulary never grows\n"
+      "  seed   the vocabulary starts from these words and grows as mapping goes on\n\n"
+      "Then map as usual: placedb map new.placedb images/");
   return {app, [request, exporter]() {
             return exporter->parsed() ? runExport(*request) : runImport(*request);
           }};

@@ -85,6 +85,10 @@ struct QueryResult {
   double time_ms = 0;
 };
 
+// How an imported vocabulary serves a map: kFixed never grows (every feature takes its nearest
+// word), kSeed is where the map's own vocabulary starts growing from.
+enum class VocabularyMode { kFixed, kSeed };
+
 class Map {
  public:
   enum class Mode { kMapping, kLocalisation };
@@ -117,6 +121,14 @@ class Map {
   // Localisation against the locations in short-term and working memory (LTM locations are not
   // searched yet); changes nothing.
   virtual QueryResult query(const cv::Mat& image, std::size_t top_k = 5) = 0;
+
+  // Starts the vocabulary of a new map (no frames, no words) from a vocabulary file: placedb's
+  // binary format, or with `text` RTAB-Map's "WordID d1 ... dN" lines. The file is read and
+  // checked whole (kVocabularyRefused, naming the reason: magic, version, checksum, truncation,
+  // dimension, extractor) before anything is written; the import is one transaction. Imported
+  // words stay in the index whatever the memory tiers do. Returns the number of words.
+  virtual std::size_t importVocabulary(const std::string& file, bool text,
+                                       VocabularyMode mode) = 0;
 
   // Ends the session cleanly. Safe to call twice.
   virtual void close() = 0;

@@ -22,6 +22,10 @@ namespace placedb {
 
 // Engine-state key of a location's own keypoint descriptors (see encodeDescriptors).
 std::string keypointDescriptorsKey(std::int64_t location_id);
+// Engine-state keys: the extractor signature a map was made with, and its imported vocabulary's
+// mode ("fixed" or "seed"; absent without an import).
+inline constexpr const char* kMapExtractorKey = "map.extractor";
+inline constexpr const char* kVocabularyModeKey = "vocabulary.mode";
 
 class MapImpl final : public Map {
  public:
@@ -37,6 +41,7 @@ class MapImpl final : public Map {
                       const std::string& source_path) override;
   FrameResult recordUnreadable(std::int64_t source_index, const std::string& source_path) override;
   QueryResult query(const cv::Mat& image, std::size_t top_k) override;
+  std::size_t importVocabulary(const std::string& file, bool text, VocabularyMode mode) override;
   void close() override;
   const Options& options() const override { return options_; }
   const std::string& path() const override { return store_->path(); }
@@ -74,7 +79,7 @@ class MapImpl final : public Map {
   void transferToLtm(std::int64_t hypothesis, double frame_seconds, FrameWrite& write,
                      FrameResult& result);
   void enterWorkingMemory(const std::vector<std::int64_t>& ids, FrameWrite& write);
-  void leaveIndex(const WordChanges& changes);
+  void leaveIndex(const WordChanges& changes);  // unreferenced words leave, imported ones stay
   void commit(FrameWrite& write, FrameResult& result, const std::string& source_path);
   std::vector<FrameRef> framesOf(std::int64_t location_id) const;
 
@@ -89,6 +94,7 @@ class MapImpl final : public Map {
   std::unique_ptr<BayesFilter> filter_;
   EngineCounters counters_;
   VocabularyStateWriter vocabulary_state_;
+  std::vector<std::int64_t> imported_words_;  // ascending; never leave the index
   std::optional<std::int64_t> session_id_;
   bool closed_ = false;
   bool broken_ = false;  // a failed commit left RAM ahead of the file: reopen to continue

@@ -10,12 +10,6 @@
 #include "placedb/version.h"
 
 namespace placedb {
-namespace {
-
-constexpr const char* kMapExtractorKey = "map.extractor";
-
-}  // namespace
-
 std::unique_ptr<Map> Map::open(const std::string& path, const Options& options, Mode mode) {
   options.validate();
   return std::make_unique<MapImpl>(path, options, mode);
@@ -49,7 +43,8 @@ void MapImpl::configure(const Options& options) {
                     "refused (use a new map)",
                     store_->path(), *made_with, options.extractor, extractor_->signature()));
   auto vocabulary_options = toVocabularyOptions(options);
-  vocabulary_options.fixed = vocabulary_options.fixed || mode_ == Mode::kLocalisation;
+  vocabulary_options.fixed = vocabulary_options.fixed || mode_ == Mode::kLocalisation ||
+                             store_->getStateText(kVocabularyModeKey) == std::string("fixed");
   vocabulary_ = std::make_unique<vocab::Vocabulary>(vocabulary_options, extractor_->dim(),
                                                     extractor_->signature());
   filter_ = std::make_unique<BayesFilter>(toFilterSettings(options));
@@ -92,6 +87,8 @@ void MapImpl::restoreFromStore() {
       index_.add(id, Signature::fromWords(std::move(signatures[id])));
     }
   }
+  imported_words_ = store_->importedWordIds();
+  word_ids.insert(word_ids.end(), imported_words_.begin(), imported_words_.end());
   std::sort(word_ids.begin(), word_ids.end());
   word_ids.erase(std::unique(word_ids.begin(), word_ids.end()), word_ids.end());
   auto state = vocabulary_state_.load(*store_);
@@ -253,10 +250,11 @@ std::string MapImpl::checkConsistency() const {
     if (!index_.contains(id)) return fmt::format("location {} missing from the index", id);
     for (const auto& e : index_.signatureOf(id).entries()) words.insert(e.word);
   }
+  words.insert(imported_words_.begin(), imported_words_.end());
   auto in_vocabulary = vocabulary_->ids();
   if (std::vector<std::int64_t>(words.begin(), words.end()) != in_vocabulary)
-    return fmt::format("vocabulary holds {} words, STM+WM reference {}", in_vocabulary.size(),
-                       words.size());
+    return fmt::format("vocabulary holds {} words, STM+WM (and imports) reference {}",
+                       in_vocabulary.size(), words.size());
   // The file agrees with RAM on every tier.
   for (std::int64_t id : live) {
     auto stored = store_->location(id);

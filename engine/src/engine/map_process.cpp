@@ -286,7 +286,12 @@ void MapImpl::transferToLtm(std::int64_t hypothesis, double frame_seconds, Frame
 }
 
 void MapImpl::leaveIndex(const WordChanges& changes) {
-  if (!changes.unreferenced.empty()) vocabulary_->erase(changes.unreferenced);
+  std::vector<std::int64_t> leaving;
+  leaving.reserve(changes.unreferenced.size());
+  for (std::int64_t word : changes.unreferenced)
+    if (!std::binary_search(imported_words_.begin(), imported_words_.end(), word))
+      leaving.push_back(word);
+  if (!leaving.empty()) vocabulary_->erase(leaving);
 }
 
 void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_path) {

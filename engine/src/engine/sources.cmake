@@ -2,6 +2,7 @@ target_sources(placedb_engine PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/engine_state.cpp
   ${CMAKE_CURRENT_LIST_DIR}/geometric_check.cpp
   ${CMAKE_CURRENT_LIST_DIR}/option_mapping.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/map_import.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_open.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_process.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_query.cpp
