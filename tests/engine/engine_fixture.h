@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,17 @@ inline Sequence loadSequence(const std::filesystem::path& dir, std::size_t limit
   return s;
 }
 
+// rtabmap_samples, read once per test binary; nullptr where the data set is absent (callers
+// GTEST_SKIP() with datasetsDir() in the message).
+inline const Sequence* rtabmapSamples() {
+  static const std::optional<Sequence> cached = []() -> std::optional<Sequence> {
+    auto dir = dataset("rtabmap_samples");
+    if (dir.empty()) return std::nullopt;
+    return loadSequence(dir);
+  }();
+  return cached ? &*cached : nullptr;
+}
+
 inline void removeMap(const std::filesystem::path& p) {
   for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(p.string() + suffix);
 }
@@ -47,9 +59,12 @@ struct Outcome {
 };
 
 inline Outcome outcomeOf(const FrameResult& r) {
-  return {r.location_id,  r.hypothesis.location_id, r.outcome,  r.hypothesis.posterior,
-          r.hypothesis.score, r.hypothesis.accepted, r.wm_size, r.stm_size, r.vocabulary_size,
-          r.transferred, r.retrieved};
+  return {r.location_id,      r.hypothesis.location_id,
+          r.outcome,          r.hypothesis.posterior,
+          r.hypothesis.score, r.hypothesis.accepted,
+          r.wm_size,          r.stm_size,
+          r.vocabulary_size,  r.transferred,
+          r.retrieved};
 }
 
 }  // namespace placedb::testing

@@ -32,10 +32,8 @@ std::int64_t sqlCount(const std::filesystem::path& map, const std::string& sql) 
 class EngineTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    auto dir = dataset("rtabmap_samples");
-    if (dir.empty()) GTEST_SKIP() << "no rtabmap_samples under " << datasetsDir();
-    static Sequence cached = loadSequence(dir);
-    seq_ = &cached;
+    seq_ = rtabmapSamples();
+    if (!seq_) GTEST_SKIP() << "no rtabmap_samples under " << datasetsDir();
     path_ = scratchDir(::testing::UnitTest::GetInstance()->current_test_info()->name()) /
             "map.placedb";
   }

@@ -10,10 +10,8 @@ namespace {
 class ResumeTest : public ::testing::TestWithParam<int> {
  protected:
   void SetUp() override {
-    auto dir = dataset("rtabmap_samples");
-    if (dir.empty()) GTEST_SKIP() << "no rtabmap_samples under " << datasetsDir();
-    static Sequence cached = loadSequence(dir);
-    seq_ = &cached;
+    seq_ = rtabmapSamples();
+    if (!seq_) GTEST_SKIP() << "no rtabmap_samples under " << datasetsDir();
   }
 
   // Maps every frame, closing and reopening the map after each `stop_every` frames.

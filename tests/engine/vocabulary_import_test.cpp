@@ -19,10 +19,8 @@ std::string bytesOf(const std::filesystem::path& p) {
 class VocabularyImport : public ::testing::Test {
  protected:
   void SetUp() override {
-    auto dir = dataset("rtabmap_samples");
-    if (dir.empty()) GTEST_SKIP() << "no rtabmap_samples under " << datasetsDir();
-    static Sequence cached = loadSequence(dir);
-    seq_ = &cached;
+    seq_ = rtabmapSamples();
+    if (!seq_) GTEST_SKIP() << "no rtabmap_samples under " << datasetsDir();
     dir_ = scratchDir(std::string("VocabularyImport_") +
                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
     // A vocabulary learnt on the first half of the sequence, written as a vocabulary file.
