@@ -34,7 +34,9 @@ class MemorySource final : public ByteSource {
  public:
   MemorySource(const unsigned char* data, std::size_t size) : data_(data), size_(size) {}
   std::size_t read(std::uint64_t offset, unsigned char* out, std::size_t n) override {
-    if (offset >= size_) return 0;
+    // n == 0 too: `out` is then often an empty vector's data(), a null pointer, and memcpy with
+    // a null pointer is undefined even for 0 bytes (fuzz_image_header: a TIFF IFD of 0 entries).
+    if (offset >= size_ || n == 0) return 0;
     const auto count = static_cast<std::size_t>(std::min<std::uint64_t>(n, size_ - offset));
     std::memcpy(out, data_ + offset, count);
     return count;
@@ -221,7 +223,7 @@ std::optional<ImageDimensions> webpDimensions(const unsigned char* head, std::si
   return std::nullopt;
 }
 
-std::optional<ImageDimensions> readDimensions(ByteSource& source) {
+std::optional<ImageDimensions> headerDimensions(ByteSource& source) {
   unsigned char head[32] = {};
   const std::size_t n = source.read(0, head, sizeof head);
   if (startsWith(head, n, "\x89PNG\r\n\x1a\n", 8)) return pngDimensions(head, n);
@@ -235,6 +237,16 @@ std::optional<ImageDimensions> readDimensions(ByteSource& source) {
   if (startsWith(head, n, "RIFF", 4) && n >= 12 && std::memcmp(head + 8, "WEBP", 4) == 0)
     return webpDimensions(head, n);
   return std::nullopt;
+}
+
+// A zero width or height is no size this reader can vouch for: give std::nullopt so the decoder
+// judges the file, as for any header that does not parse, and callers never see a 0 side. Every
+// format's header can hold one (fuzz_image_header found a BMP with height 0; PNG, JPEG, PNM, TIFF
+// and WebP ones are as easy to write), so the check is made once here for all of them.
+std::optional<ImageDimensions> readDimensions(ByteSource& source) {
+  const std::optional<ImageDimensions> size = headerDimensions(source);
+  if (size && (size->width == 0 || size->height == 0)) return std::nullopt;
+  return size;
 }
 
 }  // namespace
