@@ -246,6 +246,35 @@ TEST(ImageHeader, HandMadeTiffAndJpegLayouts) {
   }
 }
 
+// What the fuzzer found (fuzz/corpus/image_header): a zero side is no size at all, and a TIFF
+// directory with no entries is read without touching memory.
+TEST(ImageHeader, ZeroSidesAndEmptyTiffDirectoriesGiveNullopt) {
+  Bytes bmp = {'B', 'M'};
+  appendLittleEndian(bmp, 0);
+  appendLittleEndian(bmp, 0);
+  appendLittleEndian(bmp, 54);
+  appendLittleEndian(bmp, 40);
+  appendLittleEndian(bmp, 8);
+  appendLittleEndian(bmp, 0);  // height 0
+  appendLittleEndian(bmp, 1, 2);
+  appendLittleEndian(bmp, 24, 2);
+  EXPECT_FALSE(dimensionsOf(bmp).has_value());
+
+  Bytes png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  appendBigEndian(png, 13);
+  png.insert(png.end(), {'I', 'H', 'D', 'R'});
+  appendBigEndian(png, 0);  // width 0
+  appendBigEndian(png, 8);
+  png.insert(png.end(), {8, 0, 0, 0, 0});
+  EXPECT_FALSE(dimensionsOf(png).has_value());
+
+  Bytes tiff = {'I', 'I', 42, 0};
+  appendLittleEndian(tiff, 8);
+  appendLittleEndian(tiff, 0, 2);  // a directory of no entries
+  appendLittleEndian(tiff, 0);     // and no next one
+  EXPECT_FALSE(dimensionsOf(tiff).has_value());
+}
+
 TEST(ImageHeader, LimitsAreSixteenThousandPixelsASideAndFortyMegapixels) {
   EXPECT_TRUE(withinImageLimits({7680, 4320}));  // 8K UHD
   EXPECT_TRUE(withinImageLimits({16384, 2000}));
