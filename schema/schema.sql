@@ -91,6 +91,8 @@ CREATE TABLE words (
   source_frame INTEGER               -- imported words: creating frame in their source map
 );
 CREATE INDEX words_by_created_frame ON words (created_frame);
+-- Imported words only (schema 2): read on every open, so kept apart from the whole vocabulary.
+CREATE INDEX words_imported ON words (id) WHERE vocabulary_import_id IS NOT NULL;
 
 -- The signature of each location: one row per keypoint, in signature order.
 CREATE TABLE word_refs (

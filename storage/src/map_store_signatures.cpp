@@ -196,7 +196,11 @@ std::map<std::int64_t, std::vector<std::int64_t>> MapStore::loadWordIds(
 }
 
 std::vector<std::int64_t> MapStore::importedWordIds() const {
-  auto s = db_->cached("SELECT id FROM words WHERE vocabulary_import_id IS NOT NULL ORDER BY id");
+  // Read on every open: the partial index words_imported serves it without a scan of the whole
+  // vocabulary (millions of words on a long map).
+  auto s = db_->cached(
+      "SELECT id FROM words INDEXED BY words_imported WHERE vocabulary_import_id IS NOT NULL "
+      "ORDER BY id");
   std::vector<std::int64_t> ids;
   while (s->step()) ids.push_back(s->columnInt(0));
   return ids;
