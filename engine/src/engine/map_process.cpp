@@ -242,17 +242,13 @@ void MapImpl::retrieveNeighbours(std::int64_t hypothesis, FrameWrite& write, Fra
       if (!vocabulary_->contains(word)) missing.push_back(word);
   }
   std::sort(missing.begin(), missing.end());
+  missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
   if (!missing.empty()) {
-    auto records = store_->loadWords(missing);
-    cv::Mat descriptors(static_cast<int>(records.size()), vocabulary_->dim(), CV_32F);
-    std::vector<std::int64_t> ids_loaded, created;
-    for (std::size_t i = 0; i < records.size(); ++i) {
-      auto values = records[i].floats();
-      std::copy(values.begin(), values.end(), descriptors.ptr<float>(static_cast<int>(i)));
-      ids_loaded.push_back(records[i].id);
-      created.push_back(records[i].created_frame.value_or(-1));
-    }
-    vocabulary_->insert(ids_loaded, descriptors, created);
+    cv::Mat descriptors(static_cast<int>(missing.size()), vocabulary_->dim(), CV_32F);
+    std::vector<std::int64_t> created(missing.size());
+    store_->loadFloatDescriptors(missing, vocabulary_->dim(), descriptors.ptr<float>(),
+                                 created.data());
+    vocabulary_->insert(missing, descriptors, created);
   }
   for (std::int64_t id : ids) {
     graph_.addNode(id);
