@@ -5,10 +5,8 @@
 #include <boost/crc.hpp>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 
 #include "engine/map_impl.h"
-#include "engine/option_mapping.h"
 #include "vocabulary/vocabulary_file.h"
 
 namespace placedb {
