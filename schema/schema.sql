@@ -137,6 +137,18 @@ CREATE TABLE engine_state (
   value BLOB
 ) WITHOUT ROWID;
 
+-- The vocabulary's kd-forest: its internal nodes, updated every frame. A node id that is not a
+-- row is a leaf when a row names it as a child (or it is the root, node 0), free otherwise.
+CREATE TABLE kd_nodes (
+  tree INTEGER NOT NULL CHECK (tree >= 0),
+  node INTEGER NOT NULL CHECK (node >= 0),
+  left_child INTEGER NOT NULL,
+  right_child INTEGER NOT NULL,
+  split_dim INTEGER NOT NULL,
+  split_value REAL NOT NULL,
+  PRIMARY KEY (tree, node)
+) WITHOUT ROWID;
+
 -- The Bayes filter posterior after the last committed frame. location_id has no
 -- foreign key on purpose: ids <= 0 stand for the filter's virtual "new place".
 CREATE TABLE filter_posterior (
@@ -192,7 +204,12 @@ CREATE VIEW v_vocabulary_growth AS
 SELECT f.session_id, f.source_index, f.id AS frame_id, f.words_created, f.vocabulary_size
 FROM frames f;
 
+CREATE VIEW v_kd_trees AS
+SELECT tree, count(*) AS internal_nodes, count(*) + 1 AS leaves,
+       count(DISTINCT split_dim) AS split_dimensions
+FROM kd_nodes GROUP BY tree;
+
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 2;
+PRAGMA user_version = 3;
 COMMIT;

@@ -210,8 +210,8 @@ int main(int argc, char** argv) {
   std::printf("rule's own words: %zu created by quantize (%.1f%%), mean quantisation error %.4f\n",
               created_total, 100.0 * double(created_total) / (double(frames) * per_frame),
               error_sum / frames);
-  std::printf("index state: %zu split records (%zu bytes serialised)\n",
-              vocabulary.state().splits.size(), vocabulary.state().serialize().size());
+  std::printf("index state: %zu internal kd-tree nodes (%zu bytes serialised)\n",
+              vocabulary.state().nodes.size(), vocabulary.state().serialize().size());
   printRecall(vocabulary, source, queries);
   return 0;
 }

@@ -342,6 +342,68 @@ std::optional<std::string> MapStore::getStateText(const std::string& key) const 
   return s->columnText(0);
 }
 
+void MapStore::deleteState(const std::string& key) {
+  WriteScope scope(*this);
+  auto s = db_->cached("DELETE FROM engine_state WHERE key = ?1");
+  s->bind(1, key);
+  s->run();
+  scope.commit();
+}
+
+void MapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
+                            const std::vector<std::pair<int, std::int64_t>>& deletions,
+                            bool replace_all) {
+  WriteScope scope(*this);
+  if (replace_all) {
+    auto s = db_->cached("DELETE FROM kd_nodes");
+    s->run();
+  }
+  if (!deletions.empty()) {
+    auto s = db_->cached("DELETE FROM kd_nodes WHERE tree = ?1 AND node = ?2");
+    for (const auto& [tree, node] : deletions) {
+      s->bind(1, std::int64_t(tree));
+      s->bind(2, node);
+      s->run();
+    }
+  }
+  if (!upserts.empty()) {
+    auto s = db_->cached(
+        "INSERT INTO kd_nodes (tree, node, left_child, right_child, split_dim, split_value) "
+        "VALUES (?1, ?2, ?3, ?4, ?5, ?6) ON CONFLICT (tree, node) DO UPDATE SET "
+        "left_child = excluded.left_child, right_child = excluded.right_child, "
+        "split_dim = excluded.split_dim, split_value = excluded.split_value");
+    for (const KdNodeRecord& n : upserts) {
+      s->bind(1, std::int64_t(n.tree));
+      s->bind(2, n.node);
+      s->bind(3, n.left_child);
+      s->bind(4, n.right_child);
+      s->bind(5, std::int64_t(n.split_dim));
+      s->bind(6, n.split_value);
+      s->run();
+    }
+  }
+  scope.commit();
+}
+
+std::vector<KdNodeRecord> MapStore::loadKdNodes() const {
+  std::vector<KdNodeRecord> out;
+  if (schemaVersion() < 3) return out;  // a schema-2 map opened read-only: not migrated
+  auto s = db_->cached(
+      "SELECT tree, node, left_child, right_child, split_dim, split_value FROM kd_nodes "
+      "ORDER BY tree, node");
+  while (s->step()) {
+    KdNodeRecord n;
+    n.tree = static_cast<int>(s->columnInt(0));
+    n.node = s->columnInt(1);
+    n.left_child = s->columnInt(2);
+    n.right_child = s->columnInt(3);
+    n.split_dim = static_cast<int>(s->columnInt(4));
+    n.split_value = s->columnDouble(5);
+    out.push_back(n);
+  }
+  return out;
+}
+
 void MapStore::putPosterior(const std::vector<std::pair<std::int64_t, double>>& posterior) {
   WriteScope scope(*this);
   {

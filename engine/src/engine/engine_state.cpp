@@ -1,4 +1,4 @@
-// Engine counters as readable JSON, the vocabulary index state as a header plus split chunks.
+// Engine counters as readable JSON; the vocabulary index state as a header plus the kd_nodes rows.
 #include "engine/engine_state.h"
 
 #include <fmt/format.h>
@@ -16,13 +16,6 @@ constexpr const char* kVocabularyHeaderKey = "vocabulary.header";
 constexpr std::size_t kSplitBytes = 1 + 4 + 2 + 4;
 
 std::string chunkKey(std::size_t chunk) { return fmt::format("vocabulary.splits.{:06}", chunk); }
-
-template <typename T>
-void put(std::vector<std::uint8_t>& out, T value) {
-  std::uint8_t bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T));  // little-endian targets only, as the index state
-  out.insert(out.end(), bytes, bytes + sizeof(T));
-}
 
 template <typename T>
 T get(const std::uint8_t* at) {
@@ -60,10 +53,9 @@ bool EngineCounters::load(const storage::MapStore& store) {
   return true;
 }
 
-void VocabularyStateWriter::save(storage::MapStore& store, const vocab::Vocabulary& vocabulary) {
-  const std::vector<vocab::SplitRecord>& splits = vocabulary.splitLog();
-  if (vocabulary.nextWordId() != saved_next_word_id_ || saved_splits_ == 0) {
-    vocab::IndexState header;  // Vocabulary::state() without its split log
+void VocabularyStateWriter::save(storage::MapStore& store, vocab::Vocabulary& vocabulary) {
+  if (vocabulary.nextWordId() != saved_next_word_id_) {
+    vocab::IndexState header;  // Vocabulary::state() without its nodes
     header.dim = vocabulary.dim();
     header.kd_trees = vocabulary.options().kd_trees;
     header.leaf_size = vocabulary.options().leaf_size;
@@ -72,24 +64,17 @@ void VocabularyStateWriter::save(storage::MapStore& store, const vocab::Vocabula
     store.putState(kVocabularyHeaderKey, header.serialize());
     saved_next_word_id_ = header.next_word_id;
   }
-  if (splits.size() == saved_splits_ && saved_splits_ != 0) return;
-  // Rewrite from the chunk holding the first unsaved split to the end.
-  for (std::size_t chunk = saved_splits_ / kSplitsPerChunk; chunk * kSplitsPerChunk < splits.size();
-       ++chunk) {
-    std::size_t begin = chunk * kSplitsPerChunk;
-    std::size_t end = std::min(splits.size(), begin + kSplitsPerChunk);
-    std::vector<std::uint8_t> bytes;
-    bytes.reserve((end - begin) * kSplitBytes);
-    for (std::size_t i = begin; i < end; ++i) {
-      const auto& s = splits[i];
-      put(bytes, s.tree);
-      put(bytes, s.node);
-      put(bytes, s.dim);
-      put(bytes, s.value);
-    }
-    store.putState(chunkKey(chunk), bytes);
+  vocabulary.takeIndexChanges(&changes_);
+  if (!changes_.empty()) {
+    upserts_.clear();
+    deletions_.clear();
+    for (const vocab::ForestNode& n : changes_.upserts)
+      upserts_.push_back({n.tree, n.node, n.left, n.right, n.dim, n.value});
+    for (const auto& [tree, node] : changes_.deletions) deletions_.emplace_back(tree, node);
+    store.writeKdNodes(upserts_, deletions_, changes_.full);
   }
-  saved_splits_ = splits.size();
+  for (std::size_t chunk = 0; chunk < legacy_chunks_; ++chunk) store.deleteState(chunkKey(chunk));
+  legacy_chunks_ = 0;
 }
 
 std::optional<vocab::IndexState> VocabularyStateWriter::load(const storage::MapStore& store) {
@@ -101,6 +86,8 @@ std::optional<vocab::IndexState> VocabularyStateWriter::load(const storage::MapS
   } catch (const Error& e) {
     throw Error(ErrorCode::kMapRefused, store.path() + ": " + e.what());
   }
+  saved_next_word_id_ = state.next_word_id;
+  legacy_chunks_ = 0;
   for (std::size_t chunk = 0;; ++chunk) {
     auto bytes = store.getState(chunkKey(chunk));
     if (!bytes) break;
@@ -114,11 +101,27 @@ std::optional<vocab::IndexState> VocabularyStateWriter::load(const storage::MapS
       s.node = get<std::uint32_t>(p + 1);
       s.dim = get<std::uint16_t>(p + 5);
       s.value = get<float>(p + 7);
-      state.splits.push_back(s);
+      state.legacy_splits.push_back(s);
     }
+    legacy_chunks_ = chunk + 1;
   }
-  saved_splits_ = state.splits.size();
-  saved_next_word_id_ = state.next_word_id;
+  if (legacy_chunks_ > 0) saved_next_word_id_ = -1;  // rewrite the header in the new format
+  for (const storage::KdNodeRecord& r : store.loadKdNodes()) {
+    const auto id_ok = [](std::int64_t v) { return v >= 0 && v <= 0x7fffffff; };
+    if (r.tree < 0 || r.tree > 255 || !id_ok(r.node) || !id_ok(r.left_child) ||
+        !id_ok(r.right_child) || r.split_dim < 0 || r.split_dim > 65535)
+      throw Error(ErrorCode::kMapRefused,
+                  fmt::format("{}: kd_nodes row (tree {}, node {}) is damaged", store.path(),
+                              r.tree, r.node));
+    state.nodes.push_back({static_cast<std::uint8_t>(r.tree), static_cast<std::uint32_t>(r.node),
+                           static_cast<std::uint32_t>(r.left_child),
+                           static_cast<std::uint32_t>(r.right_child),
+                           static_cast<std::uint16_t>(r.split_dim),
+                           static_cast<float>(r.split_value)});
+  }
+  if (!state.nodes.empty() && !state.legacy_splits.empty())
+    throw Error(ErrorCode::kMapRefused,
+                store.path() + ": the map holds both a kd_nodes table and a split log");
   return state;
 }
 

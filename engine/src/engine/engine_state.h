@@ -24,21 +24,25 @@ struct EngineCounters {
   bool load(const storage::MapStore& store);
 };
 
-// The vocabulary's index state grows by an append-only split log; it is stored in chunks so that
-// a frame rewrites only the chunk it extended, not the whole log.
+// The vocabulary's index state: a small header in engine_state and the kd-forest's internal nodes
+// in kd_nodes, of which a frame writes only those that changed. Maps of schema 2 stored an
+// append-only split log in engine_state chunks instead; load() reads it for conversion and the
+// next save() replaces it with the node table.
 class VocabularyStateWriter {
  public:
-  static constexpr std::size_t kSplitsPerChunk = 1024;
+  static constexpr std::size_t kSplitsPerChunk = 1024;  // of the schema-2 split log
 
-  // Writes what changed since the last save() or load(). Reads the vocabulary's split log in
-  // place: copying it (Vocabulary::state()) every frame would cost as much as the log is long.
-  void save(storage::MapStore& store, const vocab::Vocabulary& vocabulary);
-  // Empty optional when the map holds no vocabulary state.
+  // Writes what changed since the last save() or load() (takes the vocabulary's index changes).
+  void save(storage::MapStore& store, vocab::Vocabulary& vocabulary);
+  // Empty optional when the map holds no vocabulary state. kMapRefused on damaged state.
   std::optional<vocab::IndexState> load(const storage::MapStore& store);
 
  private:
-  std::size_t saved_splits_ = 0;
   std::int64_t saved_next_word_id_ = -1;
+  std::size_t legacy_chunks_ = 0;  // split-log chunks still in the file, dropped by save()
+  vocab::ForestChanges changes_;   // reused every frame
+  std::vector<storage::KdNodeRecord> upserts_;
+  std::vector<std::pair<int, std::int64_t>> deletions_;
 };
 
 }  // namespace placedb

@@ -1,4 +1,5 @@
-// IndexState's byte form: "PVIS", format version, index settings, next word id, split log.
+// IndexState's byte form: "PVIS", format version, index settings, next word id, then the forest's
+// internal nodes (version 2) or its split log (version 1, written by maps of schema 2; read only).
 // Little-endian, fixed-width fields, no padding, so equal states give equal bytes.
 #include <cstring>
 #include <string>
@@ -11,8 +12,10 @@ namespace placedb::vocab {
 namespace {
 
 constexpr char kMagic[4] = {'P', 'V', 'I', 'S'};
-constexpr std::uint32_t kFormatVersion = 1;
+constexpr std::uint32_t kFormatVersion = 2;
+constexpr std::uint32_t kSplitLogVersion = 1;
 constexpr std::size_t kSplitBytes = 1 + 4 + 2 + 4;
+constexpr std::size_t kNodeBytes = 1 + 4 + 4 + 4 + 2 + 4;
 
 class Writer {
  public:
@@ -52,8 +55,10 @@ class Reader {
 }  // namespace
 
 std::vector<std::uint8_t> IndexState::serialize() const {
+  if (!legacy_splits.empty())
+    Reader::fail("a split log is only read, to convert it; it is never written");
   std::vector<std::uint8_t> out;
-  out.reserve(48 + splits.size() * kSplitBytes);
+  out.reserve(48 + nodes.size() * kNodeBytes);
   Writer w(&out);
   for (char c : kMagic) w.put(c);
   w.put(kFormatVersion);
@@ -62,12 +67,14 @@ std::vector<std::uint8_t> IndexState::serialize() const {
   w.put(std::int32_t(leaf_size));
   w.put(seed);
   w.put(next_word_id);
-  w.put(std::uint64_t(splits.size()));
-  for (const SplitRecord& s : splits) {
-    w.put(s.tree);
-    w.put(s.node);
-    w.put(s.dim);
-    w.put(s.value);
+  w.put(std::uint64_t(nodes.size()));
+  for (const ForestNode& n : nodes) {
+    w.put(n.tree);
+    w.put(n.node);
+    w.put(n.left);
+    w.put(n.right);
+    w.put(n.dim);
+    w.put(n.value);
   }
   return out;
 }
@@ -78,7 +85,8 @@ IndexState IndexState::deserialize(const std::vector<std::uint8_t>& bytes) {
     if (r.get<char>() != c) Reader::fail("wrong magic");
   }
   const auto version = r.get<std::uint32_t>();
-  if (version != kFormatVersion) Reader::fail("unsupported version " + std::to_string(version));
+  if (version != kFormatVersion && version != kSplitLogVersion)
+    Reader::fail("unsupported version " + std::to_string(version));
   IndexState s;
   s.dim = r.get<std::int32_t>();
   s.kd_trees = r.get<std::int32_t>();
@@ -86,22 +94,35 @@ IndexState IndexState::deserialize(const std::vector<std::uint8_t>& bytes) {
   s.seed = r.get<std::uint64_t>();
   s.next_word_id = r.get<std::int64_t>();
   const auto count = r.get<std::uint64_t>();
-  if (count > r.remaining() / kSplitBytes || r.remaining() != count * kSplitBytes) {
-    Reader::fail("split count does not match the size");
+  const std::size_t record = version == kSplitLogVersion ? kSplitBytes : kNodeBytes;
+  if (count > r.remaining() / record || r.remaining() != count * record) {
+    Reader::fail("record count does not match the size");
   }
-  s.splits.resize(count);
-  for (SplitRecord& split : s.splits) {
-    split.tree = r.get<std::uint8_t>();
-    split.node = r.get<std::uint32_t>();
-    split.dim = r.get<std::uint16_t>();
-    split.value = r.get<float>();
+  if (version == kSplitLogVersion) {
+    s.legacy_splits.resize(count);
+    for (SplitRecord& split : s.legacy_splits) {
+      split.tree = r.get<std::uint8_t>();
+      split.node = r.get<std::uint32_t>();
+      split.dim = r.get<std::uint16_t>();
+      split.value = r.get<float>();
+    }
+    return s;
+  }
+  s.nodes.resize(count);
+  for (ForestNode& n : s.nodes) {
+    n.tree = r.get<std::uint8_t>();
+    n.node = r.get<std::uint32_t>();
+    n.left = r.get<std::uint32_t>();
+    n.right = r.get<std::uint32_t>();
+    n.dim = r.get<std::uint16_t>();
+    n.value = r.get<float>();
   }
   return s;
 }
 
 bool IndexState::operator==(const IndexState& o) const {
   return dim == o.dim && kd_trees == o.kd_trees && leaf_size == o.leaf_size && seed == o.seed &&
-         next_word_id == o.next_word_id && splits == o.splits;
+         next_word_id == o.next_word_id && nodes == o.nodes && legacy_splits == o.legacy_splits;
 }
 
 }  // namespace placedb::vocab

@@ -112,15 +112,67 @@ void KdForest::insertAllWithoutSplitting(const std::vector<std::uint32_t>& slots
 
 void KdForest::remove(std::uint32_t slot) {
   const float* v = store_->data(slot);
-  for (auto& tree : trees_) {
-    auto& bucket = tree.nodes[leafOf(tree, v)].bucket;
+  for (std::uint32_t t = 0; t < trees_.size(); ++t) {
+    Tree& tree = trees_[t];
+    path_.clear();
+    std::int32_t node = 0;
+    while (tree.nodes[node].left >= 0) {
+      path_.push_back(node);
+      const Node& n = tree.nodes[node];
+      node = v[n.dim] < n.value ? n.left : n.right;
+    }
+    auto& bucket = tree.nodes[node].bucket;
     auto it = std::find(bucket.begin(), bucket.end(), slot);
     if (it == bucket.end()) {
       throw Error(ErrorCode::kInternal, "kd-forest: removed point is not in its bucket");
     }
     *it = bucket.back();
     bucket.pop_back();
+    // An empty leaf would keep its split forever: the trees would grow with every word ever
+    // inserted, not with the live ones.
+    if (bucket.empty() && !path_.empty()) spliceOut(t, path_.back(), node);
   }
+}
+
+std::int32_t KdForest::allocate(Tree& tree) {
+  if (!tree.free.empty()) {
+    const std::int32_t id = tree.free.top();
+    tree.free.pop();
+    tree.nodes[static_cast<std::size_t>(id)] = Node{};
+    return id;
+  }
+  tree.nodes.emplace_back();
+  return static_cast<std::int32_t>(tree.nodes.size() - 1);
+}
+
+void KdForest::release(Tree& tree, std::int32_t node) {
+  Node& n = tree.nodes[static_cast<std::size_t>(node)];
+  n = Node{};
+  n.left = kFree;
+  tree.free.push(node);
+}
+
+void KdForest::markChanged(Tree& tree, std::int32_t node) {
+  if (changed_all_) return;
+  tree.changed.push_back(node);
+  // Nobody took the changes for a long while (a vocabulary used without persistence): keep the
+  // list as long as the tree at most.
+  if (tree.changed.size() > 2 * tree.nodes.size() + 1024) {
+    std::sort(tree.changed.begin(), tree.changed.end());
+    tree.changed.erase(std::unique(tree.changed.begin(), tree.changed.end()), tree.changed.end());
+  }
+}
+
+void KdForest::spliceOut(std::uint32_t tree_index, std::int32_t parent, std::int32_t child) {
+  Tree& tree = trees_[tree_index];
+  const std::int32_t sibling =
+      tree.nodes[parent].left == child ? tree.nodes[parent].right : tree.nodes[parent].left;
+  Node moved = std::move(tree.nodes[sibling]);
+  tree.nodes[parent] = std::move(moved);
+  release(tree, child);
+  release(tree, sibling);
+  markChanged(tree, parent);
+  markChanged(tree, sibling);  // its stored row, if it was internal, must go
 }
 
 void KdForest::trySplit(std::uint32_t tree_index, std::int32_t node_index) {
@@ -153,46 +205,24 @@ void KdForest::trySplit(std::uint32_t tree_index, std::int32_t node_index) {
   for (std::uint32_t p : points) left += store_->data(p)[dim] < value ? 1 : 0;
   if (left == 0 || left == n) return;  // rounding put every point on one side
   applySplit(tree_index, node_index, static_cast<std::uint16_t>(dim), value);
-  splits_.push_back({static_cast<std::uint8_t>(tree_index), static_cast<std::uint32_t>(node_index),
-                     static_cast<std::uint16_t>(dim), value});
 }
 
 void KdForest::applySplit(std::uint32_t tree_index, std::int32_t node_index, std::uint16_t dim,
                           float value) {
   Tree& tree = trees_[tree_index];
-  const auto left = static_cast<std::int32_t>(tree.nodes.size());
-  tree.nodes.emplace_back();
-  tree.nodes.emplace_back();
+  const std::int32_t left = allocate(tree);
+  const std::int32_t right = allocate(tree);
   Node& node = tree.nodes[node_index];
   std::vector<std::uint32_t> bucket;
   bucket.swap(node.bucket);
   node.left = left;
-  node.right = left + 1;
+  node.right = right;
   node.dim = dim;
   node.value = value;
   for (std::uint32_t p : bucket) {
-    tree.nodes[store_->data(p)[dim] < value ? left : left + 1].bucket.push_back(p);
+    tree.nodes[store_->data(p)[dim] < value ? left : right].bucket.push_back(p);
   }
-}
-
-void KdForest::replaySplits(const std::vector<SplitRecord>& log) {
-  // Every split adds two nodes: sizing the node arrays first spares moving them as they grow.
-  std::vector<std::size_t> added(trees_.size(), 0);
-  for (const SplitRecord& s : log)
-    if (s.tree < trees_.size()) added[s.tree] += 2;
-  for (std::size_t t = 0; t < trees_.size(); ++t)
-    trees_[t].nodes.reserve(trees_[t].nodes.size() + added[t]);
-  splits_.reserve(splits_.size() + log.size());
-  for (const SplitRecord& s : log) {
-    if (s.tree >= trees_.size() || s.node >= trees_[s.tree].nodes.size() ||
-        trees_[s.tree].nodes[s.node].left >= 0 || s.dim >= dim_) {
-      throw Error(ErrorCode::kInvalidArgument,
-                  "vocabulary index state: split log does not fit the forest (tree " +
-                      std::to_string(s.tree) + ", node " + std::to_string(s.node) + ")");
-    }
-    applySplit(s.tree, static_cast<std::int32_t>(s.node), s.dim, s.value);
-    splits_.push_back(s);
-  }
+  markChanged(tree, node_index);
 }
 
 void KdForest::search(const float* query, std::size_t k, int checks,

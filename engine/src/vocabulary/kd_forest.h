@@ -11,25 +11,59 @@
 // with the random choice drawn from a hash of (seed, tree, node). Nothing is ever rebuilt, so no
 // call costs more than routing its points down the trees.
 //
-// Persisting the forest only needs its split log (append-only) and the set of live points:
-// replaySplits() + insertAllWithoutSplitting() of the live points rebuild the same trees with the
-// same bucket contents. Search results never depend on the order inside a bucket (whole buckets
-// are examined; ties on distance go to the smaller word id).
+// Removing a point that empties its bucket splices the bucket's parent out (the sibling takes the
+// parent's place), so every leaf but an empty root holds a point: the trees' size follows the live
+// points, not every word ever inserted, and freed nodes are reused lowest index first.
+//
+// Persisting the forest needs its internal nodes (ForestNode) and the set of live points:
+// loadNodes() + insertAllWithoutSplitting() of the live points rebuild the same trees with the
+// same bucket contents and the same free nodes. takeChanges() hands out only the nodes that
+// changed since the last call, so an engine can update its stored copy per frame. Search results
+// never depend on the order inside a bucket (whole buckets are examined; ties on distance go to
+// the smaller word id).
 #include <cstdint>
+#include <queue>
+#include <utility>
 #include <vector>
 
 #include "vocabulary/slot_store.h"
 
 namespace placedb::vocab {
 
+// A split as maps of schema 2 logged them: the leaf `node` became internal and its children got
+// the next two node ids. Read only to convert such maps.
 struct SplitRecord {
   std::uint8_t tree = 0;
-  std::uint32_t node = 0;  // the leaf that became internal; its children get the next two ids
+  std::uint32_t node = 0;
   std::uint16_t dim = 0;
   float value = 0;  // points with v[dim] < value go left
   bool operator==(const SplitRecord& o) const {
     return tree == o.tree && node == o.node && dim == o.dim && value == o.value;
   }
+};
+
+// An internal node of one tree. Nodes that are not internal are leaves when a parent names them
+// (or the root, node 0) and free otherwise.
+struct ForestNode {
+  std::uint8_t tree = 0;
+  std::uint32_t node = 0;
+  std::uint32_t left = 0;
+  std::uint32_t right = 0;
+  std::uint16_t dim = 0;
+  float value = 0;  // points with v[dim] < value go left
+  bool operator==(const ForestNode& o) const {
+    return tree == o.tree && node == o.node && left == o.left && right == o.right &&
+           dim == o.dim && value == o.value;
+  }
+};
+
+// What changed since the last KdForest::takeChanges(): internal nodes to write and node ids whose
+// stored row must go; `full` asks for the stored copy to be replaced by `upserts` alone.
+struct ForestChanges {
+  bool full = false;
+  std::vector<ForestNode> upserts;
+  std::vector<std::pair<std::uint8_t, std::uint32_t>> deletions;  // (tree, node)
+  bool empty() const { return !full && upserts.empty() && deletions.empty(); }
 };
 
 struct Neighbor {
@@ -50,7 +84,7 @@ class KdForest {
   KdForest(const SlotStore* store, int trees, int leaf_size, std::uint64_t seed);
 
   void insert(std::uint32_t slot);
-  // Used by restore: the split log already holds every split the live points caused, so the
+  // Used by restore: the loaded nodes already hold every split the live points caused, so the
   // points only go to their buckets, in the given order. Trees fill in parallel.
   void insertAllWithoutSplitting(const std::vector<std::uint32_t>& slots);
   // The slot's descriptor must still be in the store: removal routes it to its bucket.
@@ -60,15 +94,27 @@ class KdForest {
   // and k neighbours are known, never visiting a branch whose bound exceeds the k-th distance.
   void search(const float* query, std::size_t k, int checks, std::vector<Neighbor>* out) const;
 
-  const std::vector<SplitRecord>& splits() const { return splits_; }
-  // Only on a fresh forest; throws placedb::Error(kInvalidArgument) on a log that does not fit.
+  // Every internal node, by tree then node id.
+  std::vector<ForestNode> internalNodes() const;
+  void takeChanges(ForestChanges* out);
+  // Only on a fresh forest; throws placedb::Error(kInvalidArgument) on nodes that do not form
+  // trees (a child out of range or named twice, a node no path reaches, a bad dimension).
+  void loadNodes(const std::vector<ForestNode>& nodes);
+
+  // Converting a schema-2 map: replay its split log on a fresh forest, insert the live points
+  // without splitting, then collapseEmpty() splices out every subtree left without a point and
+  // marks the whole forest changed (ForestChanges::full).
   void replaySplits(const std::vector<SplitRecord>& log);
+  void collapseEmpty();
 
   int trees() const { return static_cast<int>(trees_.size()); }
+  std::size_t nodeCount() const;  // allocated nodes of all trees, internal, leaf and free
 
  private:
+  static constexpr std::int32_t kLeaf = -1;
+  static constexpr std::int32_t kFree = -2;
   struct Node {
-    std::int32_t left = -1;  // -1: leaf
+    std::int32_t left = kLeaf;  // or kFree
     std::int32_t right = -1;
     std::uint16_t dim = 0;
     float value = 0;
@@ -76,6 +122,10 @@ class KdForest {
   };
   struct Tree {
     std::vector<Node> nodes;
+    // Free node ids, smallest first: the choice of id must not depend on the order of past frees,
+    // or a restored forest (which only knows which ids are free) would pick other ids.
+    std::priority_queue<std::int32_t, std::vector<std::int32_t>, std::greater<std::int32_t>> free;
+    std::vector<std::int32_t> changed;  // node ids, unsorted, repeats allowed
   };
   struct Branch {
     float bound;
@@ -92,13 +142,20 @@ class KdForest {
   void trySplit(std::uint32_t tree_index, std::int32_t node_index);
   void applySplit(std::uint32_t tree_index, std::int32_t node_index, std::uint16_t dim,
                   float value);
+  std::int32_t allocate(Tree& tree);
+  void release(Tree& tree, std::int32_t node);
+  // `child` of `parent` holds no point: the other child takes the parent's place.
+  void spliceOut(std::uint32_t tree_index, std::int32_t parent, std::int32_t child);
+  bool pruneEmpty(std::uint32_t tree_index, std::int32_t node);  // false: the subtree is empty
+  void markChanged(Tree& tree, std::int32_t node);
 
   const SlotStore* store_;
   int dim_;
   int leaf_size_;
   std::uint64_t seed_;
   std::vector<Tree> trees_;
-  std::vector<SplitRecord> splits_;
+  bool changed_all_ = false;
+  std::vector<std::int32_t> path_;  // remove()'s scratch: the nodes from the root to a leaf
   // Per-query "already compared" marks; a counter avoids clearing them between queries.
   mutable std::vector<std::uint32_t> seen_;
   mutable std::uint32_t query_stamp_ = 0;

@@ -237,7 +237,7 @@ IndexState Vocabulary::state() const {
   s.leaf_size = options_.leaf_size;
   s.seed = options_.seed;
   s.next_word_id = next_word_id_;
-  s.splits = forest_->splits();
+  s.nodes = forest_->internalNodes();
   return s;
 }
 
@@ -253,7 +253,13 @@ void Vocabulary::restore(const IndexState& state, const std::vector<std::int64_t
   checkDescriptors(descriptors, "restore");
   require(std::size_t(descriptors.rows) == ids.size() && created_frames.size() == ids.size(),
           "restore: ids, descriptors and created frames differ in count");
-  forest_->replaySplits(state.splits);
+  const bool legacy = state.nodes.empty() && !state.legacy_splits.empty();
+  if (legacy) {
+    forest_->replaySplits(state.legacy_splits);
+  } else {
+    require(state.legacy_splits.empty(), "restore: the state holds both nodes and a split log");
+    forest_->loadNodes(state.nodes);
+  }
   touched_ = true;
   const cv::Mat rows = descriptors.isContinuous() ? descriptors : descriptors.clone();
   std::int64_t max_id = -1;
@@ -267,6 +273,7 @@ void Vocabulary::restore(const IndexState& state, const std::vector<std::int64_t
     max_id = std::max(max_id, ids[i]);
   }
   forest_->insertAllWithoutSplitting(slots);
+  if (legacy) forest_->collapseEmpty();
   require(max_id < state.next_word_id, "restore: a word id is beyond the state's next word id");
   next_word_id_ = state.next_word_id;
 }

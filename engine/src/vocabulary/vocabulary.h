@@ -67,15 +67,18 @@ struct Quantization {
   double mean_error = 0;                      // mean of distance_of_feature, 0 for no feature
 };
 
-// What must be persisted so that restore() reproduces the index exactly. The split log is
-// append-only: an engine may store only the records beyond the ones it already holds.
+// What must be persisted so that restore() reproduces the index exactly: the settings, the next
+// word id and the forest's internal nodes. An engine need not rewrite the nodes each time:
+// Vocabulary::takeIndexChanges() gives the nodes that changed. `legacy_splits` is the split log
+// that maps of schema 2 stored instead of nodes; restore() converts it.
 struct IndexState {
   int dim = 0;
   int kd_trees = 0;
   int leaf_size = 0;
   std::uint64_t seed = 0;
   std::int64_t next_word_id = 0;
-  std::vector<SplitRecord> splits;
+  std::vector<ForestNode> nodes;
+  std::vector<SplitRecord> legacy_splits;
 
   std::vector<std::uint8_t> serialize() const;  // little-endian, versioned
   // Throws placedb::Error(kInvalidArgument) on bytes that are not a valid state.
@@ -116,18 +119,16 @@ class Vocabulary {
   // The k nearest words (approximate, `checks` of the options), plain Euclidean distances.
   std::vector<std::pair<std::int64_t, float>> knn(const float* query, int k) const;
 
-  IndexState state() const;  // copies the whole split log: for tests and rare full saves
-  // The engine's cheap path: persist nextWordId() and the log records beyond the ones it already
-  // stored (the log only grows); state() == {settings, nextWordId(), splitLog()}.
-  const std::vector<SplitRecord>& splitLog() const { return forest_->splits(); }
-  // Grows whenever state() changes (both parts only grow: the split log and the next word id);
-  // persist the state when it moved. A restored vocabulary reports the same version.
-  std::uint64_t stateVersion() const {
-    return forest_->splits().size() + static_cast<std::uint64_t>(next_word_id_);
-  }
+  IndexState state() const;  // copies every node: for tests and full saves
+  // The engine's cheap path: the forest nodes that changed since the last call (or since
+  // restore()); applied to the stored copy they give state().nodes.
+  void takeIndexChanges(ForestChanges* out) { forest_->takeChanges(out); }
+  // Nodes allocated in the forest (internal, leaves and free ones): follows the words in RAM.
+  std::size_t indexNodeCount() const { return forest_->nodeCount(); }
   // On a Vocabulary that has seen no call yet: rebuilds the index from the persisted state and
   // the words in RAM at that point (ids, their descriptors and created frames, any order). No
-  // erased word is needed: erased points leave the trees, only the splits they caused remain.
+  // erased word is needed. A state with legacy_splits is converted: the next takeIndexChanges()
+  // is a full one.
   void restore(const IndexState& state, const std::vector<std::int64_t>& ids,
                const cv::Mat& descriptors, const std::vector<std::int64_t>& created_frames);
 

@@ -163,6 +163,12 @@ class MapStore {
   void putState(const std::string& key, const std::string& value);
   std::optional<std::vector<std::uint8_t>> getState(const std::string& key) const;
   std::optional<std::string> getStateText(const std::string& key) const;
+  void deleteState(const std::string& key);
+  // The vocabulary's kd-forest: upserts and deletes nodes by (tree, node); with replace_all the
+  // table is emptied first. loadKdNodes() returns every node, by tree and node.
+  void writeKdNodes(const std::vector<KdNodeRecord>& upserts,
+                    const std::vector<std::pair<int, std::int64_t>>& deletions, bool replace_all);
+  std::vector<KdNodeRecord> loadKdNodes() const;
   // Replaces the whole stored posterior.
   void putPosterior(const std::vector<std::pair<std::int64_t, double>>& posterior);
   std::vector<std::pair<std::int64_t, double>> loadPosterior() const;  // by location id

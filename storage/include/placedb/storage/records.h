@@ -94,6 +94,16 @@ struct HypothesisRecord {
   std::string rejected_reason;  // empty when accepted or not applicable (stored as NULL)
 };
 
+// One internal node of the vocabulary's kd-forest (table kd_nodes).
+struct KdNodeRecord {
+  int tree = 0;
+  std::int64_t node = 0;
+  std::int64_t left_child = 0;
+  std::int64_t right_child = 0;
+  int split_dim = 0;
+  double split_value = 0;  // points whose descriptor[split_dim] < split_value go left
+};
+
 struct VocabularyImportRecord {
   std::int64_t id = 0;  // assigned by the database
   std::optional<std::int64_t> session_id;
