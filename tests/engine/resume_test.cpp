@@ -1,8 +1,14 @@
 // Exact resume: a run stopped after any frame and resumed gives the same per-frame results as a
 // run that never stopped, also when transfer and retrieval move locations between tiers.
 #include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <cstring>
+#include <functional>
 
 #include "engine_fixture.h"
+#include "legacy_split_log.h"
+#include "vocabulary/vocabulary.h"
 
 namespace placedb::testing {
 namespace {
@@ -15,12 +21,16 @@ class ResumeTest : public ::testing::TestWithParam<int> {
   }
 
   // Maps every frame, closing and reopening the map after each `stop_every` frames.
+  // `on_close` sees the map file after each stop, before it is reopened.
   std::vector<Outcome> run(const std::string& name, const Options& options, int stop_every,
-                           bool check_consistency) {
+                           bool check_consistency,
+                           const std::function<void(const std::string&)>& on_close = {},
+                           int max_stops = -1) {
     auto path = scratchDir(name) / "map.placedb";
     removeMap(path);
     std::vector<Outcome> out;
     std::unique_ptr<Map> map;
+    int stops = 0;
     for (std::size_t i = 0; i < seq_->images.size(); ++i) {
       if (!map) {
         map = Map::open(path.string(), options);
@@ -34,7 +44,11 @@ class ResumeTest : public ::testing::TestWithParam<int> {
         std::string problem = impl(*map).checkConsistency();
         EXPECT_EQ(problem, "") << "after frame " << i;
       }
-      if (stop_every > 0 && (i + 1) % stop_every == 0) map.reset();  // destructor closes
+      if (stop_every > 0 && (i + 1) % stop_every == 0 && (max_stops < 0 || stops < max_stops)) {
+        ++stops;
+        map.reset();  // destructor closes
+        if (on_close) on_close(path.string());
+      }
     }
     return out;
   }
@@ -80,6 +94,139 @@ TEST_P(ResumeTest, StoppedEveryTenthFrameEqualsStraightRun) {
     EXPECT_GT(retrieved, 0u);
     for (const auto& o : straight) EXPECT_LE(o.wm, static_cast<std::size_t>(GetParam()));
   }
+}
+
+// Rewrites a closed map as schema 2 stored it: the kd-forest as a split log in engine_state
+// chunks behind a version-1 header, no kd_nodes table.
+void downgradeToSchemaTwo(const std::string& path) {
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr), SQLITE_OK);
+  auto exec = [&](const std::string& sql) {
+    char* error = nullptr;
+    ASSERT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &error), SQLITE_OK) << error;
+  };
+  auto blobOf = [](sqlite3_stmt* st, int column) {
+    const auto* p = static_cast<const std::uint8_t*>(sqlite3_column_blob(st, column));
+    return std::vector<std::uint8_t>(p, p + sqlite3_column_bytes(st, column));
+  };
+  sqlite3_stmt* st = nullptr;
+  std::vector<vocab::ForestNode> nodes;
+  ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT tree, node, left_child, right_child, split_dim, "
+                               "split_value FROM kd_nodes", -1, &st, nullptr), SQLITE_OK);
+  while (sqlite3_step(st) == SQLITE_ROW)
+    nodes.push_back({static_cast<std::uint8_t>(sqlite3_column_int(st, 0)),
+                     static_cast<std::uint32_t>(sqlite3_column_int64(st, 1)),
+                     static_cast<std::uint32_t>(sqlite3_column_int64(st, 2)),
+                     static_cast<std::uint32_t>(sqlite3_column_int64(st, 3)),
+                     static_cast<std::uint16_t>(sqlite3_column_int(st, 4)),
+                     static_cast<float>(sqlite3_column_double(st, 5))});
+  sqlite3_finalize(st);
+  ASSERT_GT(nodes.size(), 50u);
+  ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT value FROM engine_state WHERE key = "
+                               "'vocabulary.header'", -1, &st, nullptr), SQLITE_OK);
+  ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
+  const vocab::IndexState header = vocab::IndexState::deserialize(blobOf(st, 0));
+  sqlite3_finalize(st);
+
+  std::vector<std::uint8_t> v1;  // "PVIS", version 1, settings, next word id, no split in it
+  auto put = [&v1](const auto& value) {
+    std::uint8_t bytes[sizeof(value)];
+    std::memcpy(bytes, &value, sizeof(value));
+    v1.insert(v1.end(), bytes, bytes + sizeof(value));
+  };
+  for (char c : {'P', 'V', 'I', 'S'}) put(c);
+  put(std::uint32_t(1));
+  put(std::int32_t(header.dim));
+  put(std::int32_t(header.kd_trees));
+  put(std::int32_t(header.leaf_size));
+  put(header.seed);
+  put(header.next_word_id);
+  put(std::uint64_t(0));
+  const auto log = legacySplitLog(nodes, header.kd_trees, /*padding=*/25);
+  std::vector<std::vector<std::uint8_t>> chunks;
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    if (i % 1024 == 0) chunks.emplace_back();
+    std::vector<std::uint8_t>& c = chunks.back();
+    const auto& s = log[i];
+    std::uint8_t bytes[11];
+    std::memcpy(bytes, &s.tree, 1);
+    std::memcpy(bytes + 1, &s.node, 4);
+    std::memcpy(bytes + 5, &s.dim, 2);
+    std::memcpy(bytes + 7, &s.value, 4);
+    c.insert(c.end(), bytes, bytes + 11);
+  }
+  exec("BEGIN");
+  ASSERT_EQ(sqlite3_prepare_v2(db, "INSERT OR REPLACE INTO engine_state (key, value) VALUES (?1, ?2)",
+                               -1, &st, nullptr), SQLITE_OK);
+  auto write = [&](const std::string& key, const std::vector<std::uint8_t>& value) {
+    sqlite3_bind_text(st, 1, key.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_blob(st, 2, value.data(), static_cast<int>(value.size()), SQLITE_TRANSIENT);
+    ASSERT_EQ(sqlite3_step(st), SQLITE_DONE);
+    sqlite3_reset(st);
+  };
+  write("vocabulary.header", v1);
+  for (std::size_t c = 0; c < chunks.size(); ++c) {
+    char key[32];
+    std::snprintf(key, sizeof key, "vocabulary.splits.%06u", static_cast<unsigned>(c % 1000000));
+    write(key, chunks[c]);
+  }
+  sqlite3_finalize(st);
+  exec("DROP VIEW v_kd_trees");
+  exec("DROP TABLE kd_nodes");
+  exec("PRAGMA user_version = 2");
+  exec("COMMIT");
+  sqlite3_close(db);
+}
+
+std::int64_t countOf(const std::string& path, const std::string& sql) {
+  sqlite3* db = nullptr;
+  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_stmt* st = nullptr;
+  EXPECT_EQ(sqlite3_prepare_v2(db, sql.c_str(), -1, &st, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+  std::int64_t n = -1;
+  if (sqlite3_step(st) == SQLITE_ROW) n = sqlite3_column_int64(st, 0);
+  sqlite3_finalize(st);
+  sqlite3_close(db);
+  return n;
+}
+
+// A map written by schema 2 (kd-forest as a split log, with the empty subtrees erased words left)
+// converts when reopened and keeps closing the sequence's loops. The conversion renumbers the
+// trees' nodes, and a split's random dimension is drawn from its node id, so from there on the
+// trees grow differently than in a run that never stopped: the runs are compared by the loops
+// they accept, not frame by frame. Once converted, a further stop changes nothing.
+TEST_P(ResumeTest, SchemaTwoMapConvertsAndResumes) {
+  Options options;
+  options.wm_max = GetParam();
+  auto straight = run("straight_v2_" + std::to_string(GetParam()), options, 0, false);
+  std::string map_path;
+  auto converter = [&map_path](int convert_at_close) {
+    return [&map_path, convert_at_close, closes = 0](const std::string& path) mutable {
+      map_path = path;
+      if (++closes == convert_at_close) downgradeToSchemaTwo(path);
+    };
+  };
+  // Converted at the stop after 30 frames, stopped again after 60.
+  auto once = run("converted_once_" + std::to_string(GetParam()), options, 30, true, converter(1));
+  EXPECT_EQ(countOf(map_path, "PRAGMA user_version"), 3);
+  EXPECT_EQ(countOf(map_path, "SELECT count(*) FROM engine_state WHERE key LIKE 'vocabulary.splits%'"),
+            0);
+  EXPECT_GT(countOf(map_path, "SELECT count(*) FROM kd_nodes"), 50);
+  EXPECT_EQ(countOf(map_path, "SELECT count(*) FROM pragma_integrity_check WHERE "
+                              "integrity_check <> 'ok'"), 0);
+
+  // The same conversion, then no further stop: equal to `once` frame by frame.
+  auto converted_only = run("converted_only_" + std::to_string(GetParam()), options, 30, false,
+                            converter(1), /*max_stops=*/1);
+  expectSame(once, converted_only);
+
+  std::size_t accepted_straight = 0, accepted_converted = 0;
+  for (std::size_t i = 30; i < straight.size(); ++i) {
+    accepted_straight += straight[i].accepted;
+    accepted_converted += once[i].accepted;
+  }
+  EXPECT_GE(accepted_converted + 3, accepted_straight);
+  EXPECT_LE(accepted_converted, accepted_straight + 3);
 }
 
 INSTANTIATE_TEST_SUITE_P(WorkingMemoryBound, ResumeTest, ::testing::Values(0, 12),
