@@ -106,7 +106,9 @@ std::optional<vocab::IndexState> VocabularyStateWriter::load(const storage::MapS
     legacy_chunks_ = chunk + 1;
   }
   if (legacy_chunks_ > 0) saved_next_word_id_ = -1;  // rewrite the header in the new format
-  for (const storage::KdNodeRecord& r : store.loadKdNodes()) {
+  const std::vector<storage::KdNodeRecord> rows = store.loadKdNodes();
+  state.nodes.reserve(rows.size());
+  for (const storage::KdNodeRecord& r : rows) {
     const auto id_ok = [](std::int64_t v) { return v >= 0 && v <= 0x7fffffff; };
     if (r.tree < 0 || r.tree > 255 || !id_ok(r.node) || !id_ok(r.left_child) ||
         !id_ok(r.right_child) || r.split_dim < 0 || r.split_dim > 65535)

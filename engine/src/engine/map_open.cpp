@@ -98,12 +98,14 @@ void MapImpl::restoreFromStore() {
                             "(the setting is fixed when a map is made)",
                             store_->path(), state->kd_trees, options_.kd_trees));
   if (state) {
-    cv::Mat descriptors(static_cast<int>(word_ids.size()), extractor_->dim(), CV_32F);
-    std::vector<std::int64_t> created(word_ids.size());
-    store_->loadFloatDescriptors(word_ids, extractor_->dim(), descriptors.ptr<float>(),
-                                 created.data());
+    const int dim = extractor_->dim();
+    auto load = [&](std::size_t begin, std::size_t count, float* rows, std::int64_t* created) {
+      const std::vector<std::int64_t> span(word_ids.begin() + std::ptrdiff_t(begin),
+                                           word_ids.begin() + std::ptrdiff_t(begin + count));
+      store_->loadFloatDescriptors(span, dim, rows, created);
+    };
     try {
-      vocabulary_->restore(*state, word_ids, descriptors, created);
+      vocabulary_->restore(*state, word_ids, load);
     } catch (const Error& e) {
       // The state came from the file: if it does not fit, the file is damaged, not the caller.
       if (e.code() != ErrorCode::kInvalidArgument) throw;

@@ -1,6 +1,7 @@
 #include "vocabulary/slot_store.h"
 
 #include <algorithm>
+#include <stdexcept>
 
 namespace placedb::vocab {
 
@@ -21,6 +22,22 @@ std::uint32_t SlotStore::add(std::int64_t id, std::int64_t created_frame, const 
   }
   std::copy(descriptor, descriptor + dim_, const_cast<float*>(data(slot)));
   return slot;
+}
+
+std::size_t SlotStore::runRoom() const {
+  const std::size_t in_chunk = ids_.size() & kChunkMask;
+  return std::size_t(kChunkMask + 1) - in_chunk;
+}
+
+std::uint32_t SlotStore::appendRun(std::size_t count) {
+  if (!free_.empty() || count == 0 || count > runRoom()) throw std::logic_error("SlotStore::appendRun");
+  const auto first = static_cast<std::uint32_t>(ids_.size());
+  if ((first >> kChunkShift) >= chunks_.size()) {
+    chunks_.emplace_back(new float[std::size_t(kChunkMask + 1) * dim_]);
+  }
+  ids_.resize(ids_.size() + count, -1);
+  created_frames_.resize(created_frames_.size() + count, -1);
+  return first;
 }
 
 void SlotStore::release(std::uint32_t slot) {

@@ -15,6 +15,17 @@ class SlotStore {
   std::uint32_t add(std::int64_t id, std::int64_t created_frame, const float* descriptor);
   void release(std::uint32_t slot);
 
+  // Bulk loading without a staging copy: appendRun() takes `count` new slots in one chunk, so
+  // their descriptors are contiguous from mutableData(first); count must be at most runRoom()
+  // and no released slot may be pending. Ids and frames are set with setRecord().
+  std::size_t runRoom() const;
+  std::uint32_t appendRun(std::size_t count);
+  float* mutableData(std::uint32_t slot) { return const_cast<float*>(data(slot)); }
+  void setRecord(std::uint32_t slot, std::int64_t id, std::int64_t created_frame) {
+    ids_[slot] = id;
+    created_frames_[slot] = created_frame;
+  }
+
   const float* data(std::uint32_t slot) const {
     return chunks_[slot >> kChunkShift].get() + std::size_t(slot & kChunkMask) * dim_;
   }

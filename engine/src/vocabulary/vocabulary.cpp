@@ -244,15 +244,26 @@ IndexState Vocabulary::state() const {
 void Vocabulary::restore(const IndexState& state, const std::vector<std::int64_t>& ids,
                          const cv::Mat& descriptors,
                          const std::vector<std::int64_t>& created_frames) {
+  checkDescriptors(descriptors, "restore");
+  require(std::size_t(descriptors.rows) == ids.size() && created_frames.size() == ids.size(),
+          "restore: ids, descriptors and created frames differ in count");
+  const cv::Mat rows = descriptors.isContinuous() ? descriptors : descriptors.clone();
+  restore(state, ids, [&](std::size_t begin, std::size_t count, float* out, std::int64_t* created) {
+    const float* from = rows.ptr<float>(static_cast<int>(begin));
+    std::copy(from, from + count * std::size_t(dim_), out);
+    std::copy(created_frames.begin() + std::ptrdiff_t(begin),
+              created_frames.begin() + std::ptrdiff_t(begin + count), created);
+  });
+}
+
+void Vocabulary::restore(const IndexState& state, const std::vector<std::int64_t>& ids,
+                         const DescriptorLoader& load) {
   require(!touched_, "restore: the vocabulary has already been used");
   require(state.dim == dim_ && state.kd_trees == options_.kd_trees &&
               state.leaf_size == options_.leaf_size && state.seed == options_.seed,
           "restore: the state was made with other index settings (dim " +
               std::to_string(state.dim) + ", trees " + std::to_string(state.kd_trees) + ", leaf " +
               std::to_string(state.leaf_size) + ")");
-  checkDescriptors(descriptors, "restore");
-  require(std::size_t(descriptors.rows) == ids.size() && created_frames.size() == ids.size(),
-          "restore: ids, descriptors and created frames differ in count");
   const bool legacy = state.nodes.empty() && !state.legacy_splits.empty();
   if (legacy) {
     forest_->replaySplits(state.legacy_splits);
@@ -261,16 +272,28 @@ void Vocabulary::restore(const IndexState& state, const std::vector<std::int64_t
     forest_->loadNodes(state.nodes);
   }
   touched_ = true;
-  const cv::Mat rows = descriptors.isContinuous() ? descriptors : descriptors.clone();
   std::int64_t max_id = -1;
   std::vector<std::uint32_t> slots;
   slots.reserve(ids.size());
-  for (std::size_t i = 0; i < ids.size(); ++i) {
-    require(ids[i] >= 0 && !contains(ids[i]),
-            "restore: word " + std::to_string(ids[i]) + " negative or given twice");
-    slots.push_back(store_.add(ids[i], created_frames[i], rows.ptr<float>(int(i))));
-    slot_of_.set(ids[i], slots.back());
-    max_id = std::max(max_id, ids[i]);
+  std::vector<std::int64_t> created;
+  // Descriptors go straight into the store, a chunk's run at a time: a staging matrix would
+  // touch (and fault in) as much memory again.
+  for (std::size_t begin = 0; begin < ids.size();) {
+    const std::size_t count = std::min(ids.size() - begin, store_.runRoom());
+    const std::uint32_t first = store_.appendRun(count);
+    created.assign(count, -1);
+    load(begin, count, store_.mutableData(first), created.data());
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::int64_t id = ids[begin + k];
+      require(id >= 0 && !contains(id),
+              "restore: word " + std::to_string(id) + " negative or given twice");
+      const auto slot = static_cast<std::uint32_t>(first + k);
+      store_.setRecord(slot, id, created[k]);
+      slot_of_.set(id, slot);
+      slots.push_back(slot);
+      max_id = std::max(max_id, id);
+    }
+    begin += count;
   }
   forest_->insertAllWithoutSplitting(slots);
   if (legacy) forest_->collapseEmpty();

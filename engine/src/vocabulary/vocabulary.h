@@ -19,6 +19,7 @@
 //
 // Not thread-safe: one thread at a time (searches reuse per-query scratch marks).
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -131,6 +132,13 @@ class Vocabulary {
   // is a full one.
   void restore(const IndexState& state, const std::vector<std::int64_t>& ids,
                const cv::Mat& descriptors, const std::vector<std::int64_t>& created_frames);
+  // The same, with descriptors read straight into the index's storage: `load(begin, count, rows,
+  // created)` writes the descriptors of ids[begin, begin + count) to `rows` (count x dim floats,
+  // contiguous) and their created frames to `created`.
+  using DescriptorLoader = std::function<void(std::size_t begin, std::size_t count, float* rows,
+                                              std::int64_t* created)>;
+  void restore(const IndexState& state, const std::vector<std::int64_t>& ids,
+               const DescriptorLoader& load);
 
  private:
   void checkDescriptors(const cv::Mat& descriptors, const char* what) const;
