@@ -110,6 +110,53 @@ void KdForest::insertAllWithoutSplitting(const std::vector<std::uint32_t>& slots
   for (auto& thread : threads) thread.join();
 }
 
+KdForest::BackgroundFill::BackgroundFill(KdForest* forest) : forest_(forest) {
+  const std::size_t trees = forest->trees_.size();
+  const std::size_t workers =
+      std::min<std::size_t>(trees, std::max(1u, std::thread::hardware_concurrency()));
+  for (std::size_t w = 0; w < workers; ++w)
+    threads_.emplace_back([this, w, workers] { work(w, workers); });
+}
+
+void KdForest::BackgroundFill::add(const std::uint32_t* slots, std::size_t count) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    runs_.emplace_back(slots, slots + count);
+  }
+  ready_.notify_all();
+}
+
+void KdForest::BackgroundFill::finish() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (closed_ && threads_.empty()) return;
+    closed_ = true;
+  }
+  ready_.notify_all();
+  for (auto& thread : threads_) thread.join();
+  threads_.clear();
+  if (forest_->seen_.size() < forest_->store_->slotCount())
+    forest_->seen_.resize(forest_->store_->slotCount(), 0);
+}
+
+void KdForest::BackgroundFill::work(std::size_t first_tree, std::size_t stride) {
+  for (std::size_t next = 0;; ++next) {
+    const std::vector<std::uint32_t>* run = nullptr;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      ready_.wait(lock, [&] { return next < runs_.size() || closed_; });
+      if (next >= runs_.size()) return;  // closed and every run done
+      run = &runs_[next];
+    }
+    for (std::size_t t = first_tree; t < forest_->trees_.size(); t += stride) {
+      Tree& tree = forest_->trees_[t];
+      for (std::uint32_t slot : *run)
+        tree.nodes[static_cast<std::size_t>(forest_->leafOf(tree, forest_->store_->data(slot)))]
+            .bucket.push_back(slot);
+    }
+  }
+}
+
 void KdForest::remove(std::uint32_t slot) {
   const float* v = store_->data(slot);
   for (std::uint32_t t = 0; t < trees_.size(); ++t) {

@@ -21,8 +21,12 @@
 // changed since the last call, so an engine can update its stored copy per frame. Search results
 // never depend on the order inside a bucket (whole buckets are examined; ties on distance go to
 // the smaller word id).
+#include <condition_variable>
 #include <cstdint>
+#include <deque>
+#include <mutex>
 #include <queue>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -87,6 +91,30 @@ class KdForest {
   // Used by restore: the loaded nodes already hold every split the live points caused, so the
   // points only go to their buckets, in the given order. Trees fill in parallel.
   void insertAllWithoutSplitting(const std::vector<std::uint32_t>& slots);
+
+  // insertAllWithoutSplitting() fed run by run while the caller still loads descriptors: runs go
+  // to their buckets on background threads, each tree taking them in the order added, so the
+  // result equals one insertAllWithoutSplitting() of all runs. The store must not move the
+  // descriptors of added slots (SlotStore chunks do not move). finish() waits for the threads.
+  class BackgroundFill {
+   public:
+    explicit BackgroundFill(KdForest* forest);
+    ~BackgroundFill() { finish(); }
+    BackgroundFill(const BackgroundFill&) = delete;
+    BackgroundFill& operator=(const BackgroundFill&) = delete;
+    void add(const std::uint32_t* slots, std::size_t count);
+    void finish();
+
+   private:
+    void work(std::size_t first_tree, std::size_t stride);
+
+    KdForest* forest_;
+    std::mutex mutex_;
+    std::condition_variable ready_;
+    std::deque<std::vector<std::uint32_t>> runs_;  // a deque: adding never moves earlier runs
+    bool closed_ = false;
+    std::vector<std::thread> threads_;
+  };
   // The slot's descriptor must still be in the store: removal routes it to its bucket.
   void remove(std::uint32_t slot);
 

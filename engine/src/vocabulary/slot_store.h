@@ -19,6 +19,9 @@ class SlotStore {
   // their descriptors are contiguous from mutableData(first); count must be at most runRoom()
   // and no released slot may be pending. Ids and frames are set with setRecord().
   std::size_t runRoom() const;
+  // Room for `slots` slots in all without moving the chunk table (readers on other threads
+  // may then use data() of existing slots while runs are appended).
+  void reserve(std::size_t slots) { chunks_.reserve((slots >> kChunkShift) + 1); }
   std::uint32_t appendRun(std::size_t count);
   float* mutableData(std::uint32_t slot) { return const_cast<float*>(data(slot)); }
   void setRecord(std::uint32_t slot, std::int64_t id, std::int64_t created_frame) {

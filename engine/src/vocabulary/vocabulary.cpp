@@ -276,8 +276,11 @@ void Vocabulary::restore(const IndexState& state, const std::vector<std::int64_t
   std::vector<std::uint32_t> slots;
   slots.reserve(ids.size());
   std::vector<std::int64_t> created;
-  // Descriptors go straight into the store, a chunk's run at a time: a staging matrix would
-  // touch (and fault in) as much memory again.
+  // Descriptors go straight into the store, a chunk's run at a time (a staging matrix would
+  // touch, and fault in, as much memory again), and each run goes down the trees on other
+  // threads while the next one loads.
+  store_.reserve(ids.size());
+  KdForest::BackgroundFill fill(forest_.get());
   for (std::size_t begin = 0; begin < ids.size();) {
     const std::size_t count = std::min(ids.size() - begin, store_.runRoom());
     const std::uint32_t first = store_.appendRun(count);
@@ -293,9 +296,10 @@ void Vocabulary::restore(const IndexState& state, const std::vector<std::int64_t
       slots.push_back(slot);
       max_id = std::max(max_id, id);
     }
+    fill.add(slots.data() + begin, count);
     begin += count;
   }
-  forest_->insertAllWithoutSplitting(slots);
+  fill.finish();
   if (legacy) forest_->collapseEmpty();
   require(max_id < state.next_word_id, "restore: a word id is beyond the state's next word id");
   next_word_id_ = state.next_word_id;
