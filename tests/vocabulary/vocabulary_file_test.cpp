@@ -145,6 +145,25 @@ TEST_F(VocabularyFile, RefusesBitFlipsAnywhere) {
   }
 }
 
+// The header alone (what `vocab import` reads to pick the map's extractor) is checked in full
+// but leaves the payload unread: payload damage shows only in a full read.
+TEST_F(VocabularyFile, HeaderOnlyReadChecksTheHeaderNotThePayload) {
+  const VocabularyData header = readVocabularyFile(path_, {"", 0, true});
+  EXPECT_EQ(header.extractor, "surf-test-v1");
+  EXPECT_EQ(header.dim, 8);
+  EXPECT_EQ(header.settings, data_.settings);
+  EXPECT_TRUE(header.ids.empty());
+  std::string payload_flip = bytes_;
+  payload_flip[bytes_.size() - 1] ^= 0x10;
+  writeBytes(dir_ / "payload_flip.pvoc", payload_flip);
+  EXPECT_EQ(readVocabularyFile(dir_ / "payload_flip.pvoc", {"", 0, true}).extractor,
+            "surf-test-v1");
+  refusal(payload_flip);
+  std::string header_flip = bytes_;
+  header_flip[25] ^= 0x10;
+  EXPECT_NE(refusal(header_flip, {"", 0, true}).find("checksum"), std::string::npos);
+}
+
 TEST_F(VocabularyFile, RefusesTruncationAtAnyLength) {
   for (std::size_t length :
        {std::size_t(0), std::size_t(3), std::size_t(8), std::size_t(11), std::size_t(15),

@@ -89,14 +89,15 @@ int runImport(const VocabRequest& request) {
   if (request.mode != "fixed" && request.mode != "seed")
     throw Error(ErrorCode::kInvalidArgument,
                 fmt::format("--mode {} is not valid (valid: fixed|seed)", request.mode));
-  // The file is checked before a map is created for it: a refused file leaves no map behind.
-  vocab::VocabularyData data = request.text ? vocab::readVocabularyText(request.file)
-                                            : vocab::readVocabularyFile(request.file);
+  // The map takes the extractor that made the words ("surf" or its signature "surf-64"): only
+  // the header is read for it here. importVocabulary() checks the whole file before it writes,
+  // and a map created for a file it refuses is removed below.
   Options options;
-  // The map takes the extractor that made the words ("surf" or its signature "surf-64").
+  vocab::VocabularyData header;
+  if (!request.text) header = vocab::readVocabularyFile(request.file, {"", 0, true});
   const std::string named =
       request.text ? (request.extractor.empty() ? Options().extractor : request.extractor)
-                   : data.extractor;
+                   : header.extractor;
   options.extractor = named.substr(0, named.find('-'));
   if (!request.extractor.empty() && request.extractor != options.extractor)
     throw Error(ErrorCode::kVocabularyRefused,
@@ -116,9 +117,10 @@ int runImport(const VocabRequest& request) {
         std::filesystem::remove(request.map_path + suffix);
     throw;
   }
-  std::fputs(fmt::format("placedb: imported {} words ({}, dimension {}) into {} as a {} "
-                         "vocabulary\n",
-                         words, options.extractor, data.dim, request.map_path, request.mode)
+  const std::string dimension =
+      header.dim > 0 ? fmt::format(", dimension {}", header.dim) : std::string();
+  std::fputs(fmt::format("placedb: imported {} words ({}{}) into {} as a {} vocabulary\n", words,
+                         options.extractor, dimension, request.map_path, request.mode)
                  .c_str(),
              stderr);
   return 0;

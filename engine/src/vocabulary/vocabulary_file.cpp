@@ -219,6 +219,7 @@ VocabularyData readVocabularyFile(const std::filesystem::path& path,
     if (data.unit != DistanceUnit::kSquared && data.unit != DistanceUnit::kEuclidean) {
       refuse(path, "unknown distance unit");
     }
+    if (expect.header_only) return data;
     std::uint64_t payload_length = 0;
     std::uint32_t payload_crc = 0;
     if (file_size - consumed < 12) refuse(path, "truncated before the payload");

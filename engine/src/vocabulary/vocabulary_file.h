@@ -42,10 +42,12 @@ struct VocabularyData {
   cv::Mat descriptors;  // ids.size() x dim, CV_32F
 };
 
-// What the reader insists on; empty extractor / zero dimension accept any.
+// What the reader insists on; empty extractor / zero dimension accept any. header_only stops
+// after the header (checked, checksum included): the words stay empty and the payload unread.
 struct VocabularyExpectation {
   std::string extractor;
   int dim = 0;
+  bool header_only = false;
 };
 
 // The words in RAM, ascending ids, with the vocabulary's settings.
