@@ -111,8 +111,11 @@ void downgradeToSchemaTwo(const std::string& path) {
   };
   sqlite3_stmt* st = nullptr;
   std::vector<vocab::ForestNode> nodes;
-  ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT tree, node, left_child, right_child, split_dim, "
-                               "split_value FROM kd_nodes", -1, &st, nullptr), SQLITE_OK);
+  ASSERT_EQ(sqlite3_prepare_v2(db,
+                               "SELECT tree, node, left_child, right_child, split_dim, "
+                               "split_value FROM kd_nodes",
+                               -1, &st, nullptr),
+            SQLITE_OK);
   while (sqlite3_step(st) == SQLITE_ROW)
     nodes.push_back({static_cast<std::uint8_t>(sqlite3_column_int(st, 0)),
                      static_cast<std::uint32_t>(sqlite3_column_int64(st, 1)),
@@ -122,8 +125,11 @@ void downgradeToSchemaTwo(const std::string& path) {
                      static_cast<float>(sqlite3_column_double(st, 5))});
   sqlite3_finalize(st);
   ASSERT_GT(nodes.size(), 50u);
-  ASSERT_EQ(sqlite3_prepare_v2(db, "SELECT value FROM engine_state WHERE key = "
-                               "'vocabulary.header'", -1, &st, nullptr), SQLITE_OK);
+  ASSERT_EQ(sqlite3_prepare_v2(db,
+                               "SELECT value FROM engine_state WHERE key = "
+                               "'vocabulary.header'",
+                               -1, &st, nullptr),
+            SQLITE_OK);
   ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
   const vocab::IndexState header = vocab::IndexState::deserialize(blobOf(st, 0));
   sqlite3_finalize(st);
@@ -156,8 +162,10 @@ void downgradeToSchemaTwo(const std::string& path) {
     c.insert(c.end(), bytes, bytes + 11);
   }
   exec("BEGIN");
-  ASSERT_EQ(sqlite3_prepare_v2(db, "INSERT OR REPLACE INTO engine_state (key, value) VALUES (?1, ?2)",
-                               -1, &st, nullptr), SQLITE_OK);
+  ASSERT_EQ(
+      sqlite3_prepare_v2(db, "INSERT OR REPLACE INTO engine_state (key, value) VALUES (?1, ?2)", -1,
+                         &st, nullptr),
+      SQLITE_OK);
   auto write = [&](const std::string& key, const std::vector<std::uint8_t>& value) {
     sqlite3_bind_text(st, 1, key.c_str(), -1, SQLITE_TRANSIENT);
     sqlite3_bind_blob(st, 2, value.data(), static_cast<int>(value.size()), SQLITE_TRANSIENT);
@@ -209,11 +217,14 @@ TEST_P(ResumeTest, SchemaTwoMapConvertsAndResumes) {
   // Converted at the stop after 30 frames, stopped again after 60.
   auto once = run("converted_once_" + std::to_string(GetParam()), options, 30, true, converter(1));
   EXPECT_EQ(countOf(map_path, "PRAGMA user_version"), 3);
-  EXPECT_EQ(countOf(map_path, "SELECT count(*) FROM engine_state WHERE key LIKE 'vocabulary.splits%'"),
-            0);
+  EXPECT_EQ(
+      countOf(map_path, "SELECT count(*) FROM engine_state WHERE key LIKE 'vocabulary.splits%'"),
+      0);
   EXPECT_GT(countOf(map_path, "SELECT count(*) FROM kd_nodes"), 50);
-  EXPECT_EQ(countOf(map_path, "SELECT count(*) FROM pragma_integrity_check WHERE "
-                              "integrity_check <> 'ok'"), 0);
+  EXPECT_EQ(countOf(map_path,
+                    "SELECT count(*) FROM pragma_integrity_check WHERE "
+                    "integrity_check <> 'ok'"),
+            0);
 
   // The same conversion, then no further stop: equal to `once` frame by frame.
   auto converted_only = run("converted_only_" + std::to_string(GetParam()), options, 30, false,

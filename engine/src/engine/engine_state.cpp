@@ -115,11 +115,10 @@ std::optional<vocab::IndexState> VocabularyStateWriter::load(const storage::MapS
       throw Error(ErrorCode::kMapRefused,
                   fmt::format("{}: kd_nodes row (tree {}, node {}) is damaged", store.path(),
                               r.tree, r.node));
-    state.nodes.push_back({static_cast<std::uint8_t>(r.tree), static_cast<std::uint32_t>(r.node),
-                           static_cast<std::uint32_t>(r.left_child),
-                           static_cast<std::uint32_t>(r.right_child),
-                           static_cast<std::uint16_t>(r.split_dim),
-                           static_cast<float>(r.split_value)});
+    state.nodes.push_back(
+        {static_cast<std::uint8_t>(r.tree), static_cast<std::uint32_t>(r.node),
+         static_cast<std::uint32_t>(r.left_child), static_cast<std::uint32_t>(r.right_child),
+         static_cast<std::uint16_t>(r.split_dim), static_cast<float>(r.split_value)});
   }
   if (!state.nodes.empty() && !state.legacy_splits.empty())
     throw Error(ErrorCode::kMapRefused,

@@ -56,8 +56,8 @@ struct ForestNode {
   std::uint16_t dim = 0;
   float value = 0;  // points with v[dim] < value go left
   bool operator==(const ForestNode& o) const {
-    return tree == o.tree && node == o.node && left == o.left && right == o.right &&
-           dim == o.dim && value == o.value;
+    return tree == o.tree && node == o.node && left == o.left && right == o.right && dim == o.dim &&
+           value == o.value;
   }
 };
 

@@ -83,8 +83,8 @@ void KdForest::loadNodes(const std::vector<ForestNode>& nodes) {
     if (n.dim >= dim_ || !std::isfinite(n.value))
       refuse("node " + std::to_string(n.node) + " of tree " + std::to_string(n.tree) +
              " splits on a bad dimension or value");
-    size[n.tree] = std::max<std::size_t>({size[n.tree], std::size_t(n.node) + 1,
-                                          std::size_t(n.left) + 1, std::size_t(n.right) + 1});
+    size[n.tree] = std::max<std::size_t>(
+        {size[n.tree], std::size_t(n.node) + 1, std::size_t(n.left) + 1, std::size_t(n.right) + 1});
   }
   for (std::size_t t = 0; t < trees_.size(); ++t) {
     trees_[t].nodes.assign(size[t], Node{});

@@ -30,7 +30,8 @@ std::size_t SlotStore::runRoom() const {
 }
 
 std::uint32_t SlotStore::appendRun(std::size_t count) {
-  if (!free_.empty() || count == 0 || count > runRoom()) throw std::logic_error("SlotStore::appendRun");
+  if (!free_.empty() || count == 0 || count > runRoom())
+    throw std::logic_error("SlotStore::appendRun");
   const auto first = static_cast<std::uint32_t>(ids_.size());
   if ((first >> kChunkShift) >= chunks_.size()) {
     chunks_.emplace_back(new float[std::size_t(kChunkMask + 1) * dim_]);

@@ -135,8 +135,8 @@ class Vocabulary {
   // The same, with descriptors read straight into the index's storage: `load(begin, count, rows,
   // created)` writes the descriptors of ids[begin, begin + count) to `rows` (count x dim floats,
   // contiguous) and their created frames to `created`.
-  using DescriptorLoader = std::function<void(std::size_t begin, std::size_t count, float* rows,
-                                              std::int64_t* created)>;
+  using DescriptorLoader =
+      std::function<void(std::size_t begin, std::size_t count, float* rows, std::int64_t* created)>;
   void restore(const IndexState& state, const std::vector<std::int64_t>& ids,
                const DescriptorLoader& load);
 

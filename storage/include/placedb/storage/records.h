@@ -64,7 +64,7 @@ struct WordRecord {
   std::optional<std::int64_t> vocabulary_import_id;  // set for imported words
   DescriptorKind type = DescriptorKind::kFloat32;
   int dim = 0;
-  std::vector<std::uint8_t> descriptor;  // dim values of `type`, little-endian
+  std::vector<std::uint8_t> descriptor;      // dim values of `type`, little-endian
   std::optional<std::int64_t> source_frame;  // imported words: creating frame in the source map
 
   static WordRecord fromFloats(std::int64_t id, std::optional<std::int64_t> created_frame,
