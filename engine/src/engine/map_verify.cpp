@@ -49,7 +49,10 @@ GeometricView MapImpl::viewOf(std::int64_t location_id,
 }
 
 std::vector<LocationId> MapImpl::nearLastClosure(std::int64_t frame_id) const {
-  if (options_.temporal_min_inliers <= 0 || counters_.last_closure_location == 0) return {};
+  // Without the geometric check there is no inlier count to relax.
+  if (options_.temporal_min_inliers <= 0 || options_.geometry_min_inliers <= 0 ||
+      counters_.last_closure_location == 0)
+    return {};
   if (counters_.last_closure_session != *session_id_ ||
       frame_id - counters_.last_closure_frame > options_.temporal_max_gap)
     return {};
