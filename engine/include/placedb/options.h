@@ -53,6 +53,14 @@ struct Options {
   double geometry_max_error_px = 3.0;  // RANSAC distance to the epipolar line, pixels
   double geometry_match_ratio = 0.8;   // descriptor ratio test for the check's matches
 
+  // --- temporal consistency (iBoW-LCD's islands; RTAB-Map's closures that follow the graph) ---
+  // A hypothesis that misses geometry_min_inliers still passes with temporal_min_inliers when
+  // it lies within temporal_radius WM links of the location accepted as loop closure at most
+  // temporal_max_gap frames before; those locations are checked as candidates too.
+  int temporal_min_inliers = 7;        // 0 = off
+  int temporal_radius = 2;             // links from the last accepted closure
+  int temporal_max_gap = 1;            // frames since the last accepted closure (1 = previous)
+
   // Throws placedb::Error(kInvalidArgument) naming the key and the valid values or range;
   // an unknown key is refused with the list of known ones.
   static Options fromSettings(const std::map<std::string, std::string>& settings,

@@ -151,6 +151,15 @@ const std::vector<Row>& table() {
            "RANSAC threshold: distance of a keypoint from its epipolar line, in pixels"),
       real("geometry_match_ratio", &Options::geometry_match_ratio, 0.1, 1, "0.1..1",
            "geometric check: nearest/second-nearest descriptor distance ratio for a match"),
+      integer("temporal_min_inliers", &Options::temporal_min_inliers, 0, 10000, "0..10000",
+              "inliers that suffice for a hypothesis near the last accepted loop closure (see "
+              "temporal_radius, temporal_max_gap); 0 = off"),
+      integer("temporal_radius", &Options::temporal_radius, 0, 100, "0..100",
+              "WM links from the last accepted loop closure within which temporal_min_inliers "
+              "applies; those locations are also checked as candidates"),
+      integer("temporal_max_gap", &Options::temporal_max_gap, 1, 100000, "1..100000",
+              "frames since the last accepted loop closure for temporal_min_inliers to apply "
+              "(1 = the previous frame's)"),
   };
   return rows;
 }
@@ -215,6 +224,7 @@ Options Options::paperPreset() {
   o.hypothesis_radius = 0;
   o.hypothesis_top_similar = 0;
   o.geometry_min_inliers = 0;
+  o.temporal_min_inliers = 0;
   return o;
 }
 

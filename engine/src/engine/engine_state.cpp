@@ -30,7 +30,10 @@ void EngineCounters::save(storage::MapStore& store) const {
   nlohmann::json j = {{"next_frame_id", next_frame_id},  {"next_location_id", next_location_id},
                       {"feature_sum", feature_sum},      {"feature_frames", feature_frames},
                       {"last_location", last_location},  {"last_session", last_session},
-                      {"previous_score", previous_score}};
+                      {"previous_score", previous_score},
+                      {"last_closure_location", last_closure_location},
+                      {"last_closure_frame", last_closure_frame},
+                      {"last_closure_session", last_closure_session}};
   store.putState(kCountersKey, j.dump());
 }
 
@@ -46,6 +49,10 @@ bool EngineCounters::load(const storage::MapStore& store) {
     last_location = j.at("last_location").get<std::int64_t>();
     last_session = j.at("last_session").get<std::int64_t>();
     previous_score = j.at("previous_score").get<double>();
+    // Absent from maps made before temporal consistency: no closure to continue from.
+    last_closure_location = j.value("last_closure_location", std::int64_t{0});
+    last_closure_frame = j.value("last_closure_frame", std::int64_t{0});
+    last_closure_session = j.value("last_closure_session", std::int64_t{0});
   } catch (const nlohmann::json::exception& e) {
     throw Error(ErrorCode::kMapRefused, fmt::format("{}: engine state '{}' is damaged: {}",
                                                     store.path(), kCountersKey, e.what()));

@@ -71,9 +71,14 @@ class MapImpl final : public Map {
     bool passed = false;        // the geometric check (or no check) let it through
     int inliers = 0;
     int matches = 0;  // descriptor matches behind the inliers
+    bool temporal = false;  // passed on temporal_min_inliers, near the last accepted closure
   };
   Verified verifyHypothesis(const FilterOutcome& outcome, const Features& features,
-                            const std::vector<LocationSimilarity>& similarities);
+                            const std::vector<LocationSimilarity>& similarities,
+                            std::int64_t frame_id);
+  // WM locations within temporal_radius links of the last accepted loop closure, sorted; empty
+  // when temporal consistency is off or that closure is too old or from another session.
+  std::vector<LocationId> nearLastClosure(std::int64_t frame_id) const;
   GeometricView viewOf(std::int64_t location_id, const std::vector<storage::WordRef>& refs) const;
   void retrieveNeighbours(std::int64_t hypothesis, FrameWrite& write, FrameResult& result);
   void transferToLtm(std::int64_t hypothesis, double frame_seconds, FrameWrite& write,

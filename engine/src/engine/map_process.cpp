@@ -167,7 +167,7 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
   stage = Clock::now();
   FilterOutcome outcome = filter_->update(tiers_->wm(), similarities, graph_);
   counters_.previous_score = filter_->state().previous_score;
-  const Verified verified = verifyHypothesis(outcome, features, similarities);
+  const Verified verified = verifyHypothesis(outcome, features, similarities, r.frame_id);
   const std::int64_t hypothesis = verified.location;
   const bool has_hypothesis = hypothesis != kNewPlace;
   std::string reason;
@@ -180,6 +180,13 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
     // EVALUATION.md: the score is 0 where a check other than the final threshold rejected it.
     const bool vetoed = !verified.passed || outcome.reason == RejectReason::kRatioTest;
     r.hypothesis.score = vetoed ? 0.0 : outcome.score;
+    // Only a closure that passed on its own anchors the next ones: chains of temporal
+    // acceptances would drift along the graph while the camera moves on.
+    if (r.hypothesis.accepted && !verified.temporal) {
+      counters_.last_closure_location = hypothesis;
+      counters_.last_closure_frame = r.frame_id;
+      counters_.last_closure_session = r.session_id;
+    }
     if (r.hypothesis.accepted && hypothesis != r.location_id) {
       w.links.push_back(
           link(r.location_id, hypothesis, storage::LinkType::kLoopClosure, r.hypothesis.score));

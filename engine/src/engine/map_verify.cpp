@@ -48,8 +48,27 @@ GeometricView MapImpl::viewOf(std::int64_t location_id,
   return view;
 }
 
+std::vector<LocationId> MapImpl::nearLastClosure(std::int64_t frame_id) const {
+  // Without the geometric check there is no inlier count to relax.
+  if (options_.temporal_min_inliers <= 0 || options_.geometry_min_inliers <= 0 ||
+      counters_.last_closure_location == 0)
+    return {};
+  if (counters_.last_closure_session != *session_id_ ||
+      frame_id - counters_.last_closure_frame > options_.temporal_max_gap)
+    return {};
+  std::vector<LocationId> near;
+  const auto inWm = [this](LocationId id) {
+    return tiers_->contains(id) && tiers_->tierOf(id) == Tier::kWm;
+  };
+  for (const auto& [id, depth] :
+       graph_.withinLinks(counters_.last_closure_location, options_.temporal_radius, inWm))
+    near.push_back(id);  // sorted by id
+  return near;
+}
+
 MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const Features& features,
-                                            const std::vector<LocationSimilarity>& similarities) {
+                                            const std::vector<LocationSimilarity>& similarities,
+                                            std::int64_t frame_id) {
   Verified v;
   v.location = outcome.hypothesis;
   if (outcome.hypothesis == kNewPlace) return v;
@@ -83,6 +102,12 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
       if (seen.insert(top[i].location).second) candidates.push_back(top[i].location);
   }
 
+  // The neighbourhood of the last accepted closure competes too: after a detour of the filter
+  // the revisit usually goes on where the previous frame's closure was.
+  const std::vector<LocationId> near = nearLastClosure(frame_id);
+  for (LocationId n : near)
+    if (seen.insert(n).second) candidates.push_back(n);
+
   const GeometricCheckSettings geometry = toGeometricCheckSettings(options_);
   if (geometry.min_inliers <= 0) {
     // No check: the most similar candidate, the filter's own choice on ties.
@@ -103,7 +128,9 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   query.points.reserve(features.size());
   for (const auto& k : features.keypoints) query.points.emplace_back(k.x, k.y);
   const auto refs = store_->loadWordRefs(candidates);
-  int best = -1;
+  int best = -1, best_near = -1;
+  LocationId near_location = kNewPlace;
+  int near_matches = 0;
   for (LocationId c : candidates) {
     auto it = refs.find(c);
     if (it == refs.end()) continue;
@@ -113,9 +140,22 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
       v.location = c;
       v.matches = g.matches;
     }
+    if (g.inliers > best_near && std::binary_search(near.begin(), near.end(), c)) {
+      best_near = g.inliers;
+      near_location = c;
+      near_matches = g.matches;
+    }
   }
   v.inliers = std::max(best, 0);
   v.passed = v.inliers >= geometry.min_inliers;
+  if (!v.passed && best_near >= options_.temporal_min_inliers && near_location != kNewPlace) {
+    // Too few inliers for a place on its own, enough for one that continues the last closure.
+    v.location = near_location;
+    v.inliers = best_near;
+    v.matches = near_matches;
+    v.passed = true;
+    v.temporal = true;
+  }
   return v;
 }
 

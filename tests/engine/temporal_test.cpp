@@ -1,0 +1,152 @@
+// Temporal consistency: a hypothesis with fewer inliers than geometry_min_inliers passes with
+// temporal_min_inliers when it lies near the previous frame's loop closure, and the closure it
+// continues from survives closing and reopening the map.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "engine_fixture.h"
+
+namespace placedb::testing {
+namespace {
+
+struct Frame {
+  bool accepted = false;
+  int inliers = 0;
+  std::int64_t hypothesis = 0;
+  std::vector<std::int64_t> source_indices;  // frames the hypothesis covers
+};
+
+class TemporalTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    seq_ = rtabmapSamples();
+    if (!seq_) GTEST_SKIP() << "no rtabmap_samples under " << datasetsDir();
+    std::ifstream gt(dataset("rtabmap_samples") / "gt_pairs.txt");
+    std::string line;
+    while (std::getline(gt, line)) {
+      std::istringstream fields(line);
+      std::int64_t q, r;
+      if (!line.empty() && line[0] != '#' && fields >> q >> r) truth_[q].push_back(r);
+    }
+  }
+
+  // Maps every frame; the map is closed after each frame in stop_after and resumed.
+  std::vector<Frame> run(const std::string& name, const Options& options,
+                         const std::set<std::size_t>& stop_after = {}) {
+    auto path = scratchDir(name) / "map.placedb";
+    removeMap(path);
+    std::vector<Frame> out;
+    std::unique_ptr<Map> map;
+    for (std::size_t i = 0; i < seq_->images.size(); ++i) {
+      if (!map) {
+        map = Map::open(path.string(), options);
+        if (i == 0)
+          map->beginSession("rtabmap_samples");
+        else
+          map->resumeSession(map->lastSession()->id);
+      }
+      const FrameResult r = map->process(seq_->images[i], i, seq_->paths[i]);
+      Frame f;
+      f.accepted = r.hypothesis.accepted;
+      f.inliers = r.hypothesis.inliers;
+      f.hypothesis = r.hypothesis.location_id;
+      for (const auto& ref : r.hypothesis.frames) f.source_indices.push_back(ref.source_index);
+      out.push_back(f);
+      if (stop_after.count(i)) map.reset();  // destructor closes
+    }
+    return out;
+  }
+
+  bool rightPlace(std::size_t frame, const Frame& f) const {
+    auto it = truth_.find(static_cast<std::int64_t>(frame));
+    if (it == truth_.end()) return false;
+    for (std::int64_t c : f.source_indices)
+      for (std::int64_t r : it->second)
+        if (std::llabs(c - r) <= 10) return true;
+    return false;
+  }
+
+  const Sequence* seq_ = nullptr;
+  std::map<std::int64_t, std::vector<std::int64_t>> truth_;
+};
+
+// Frames accepted with fewer inliers than the full check needs.
+std::vector<std::size_t> temporalAcceptances(const std::vector<Frame>& frames,
+                                             const Options& options) {
+  std::vector<std::size_t> out;
+  for (std::size_t i = 0; i < frames.size(); ++i)
+    if (frames[i].accepted && frames[i].inliers < options.geometry_min_inliers) out.push_back(i);
+  return out;
+}
+
+TEST_F(TemporalTest, WeakHypothesesNextToThePreviousClosureAreAcceptedAndRight) {
+  Options on;
+  ASSERT_GT(on.temporal_min_inliers, 0) << "temporal consistency is on by default";
+  Options off = on;
+  off.temporal_min_inliers = 0;
+  const auto with = run("temporal_on", on);
+  const auto without = run("temporal_off", off);
+
+  EXPECT_TRUE(temporalAcceptances(without, off).empty())
+      << "without temporal consistency every accepted hypothesis has the full inlier count";
+  const auto weak = temporalAcceptances(with, on);
+  ASSERT_FALSE(weak.empty()) << "the corridor's revisits have frames with few inliers";
+  for (std::size_t i : weak) {
+    SCOPED_TRACE("frame " + std::to_string(i));
+    EXPECT_GE(with[i].inliers, on.temporal_min_inliers);
+    // temporal_max_gap 1: the frame just before closed a loop on its own inlier count.
+    ASSERT_GT(i, 0u);
+    EXPECT_TRUE(with[i - 1].accepted);
+    EXPECT_GE(with[i - 1].inliers, on.geometry_min_inliers)
+        << "a temporal acceptance never anchors the next one";
+    EXPECT_TRUE(rightPlace(i, with[i])) << "hypothesis frames " << with[i].source_indices.front();
+  }
+
+  std::size_t accepted_on = 0, accepted_off = 0;
+  for (std::size_t i = 0; i < with.size(); ++i) {
+    accepted_on += with[i].accepted;
+    accepted_off += without[i].accepted;
+    if (with[i].accepted) {
+      EXPECT_TRUE(rightPlace(i, with[i])) << "frame " << i;
+    }
+  }
+  EXPECT_GT(accepted_on, accepted_off);
+}
+
+TEST_F(TemporalTest, ResumingJustBeforeAWeakClosureGivesTheSameResult) {
+  Options options;
+  const auto straight = run("temporal_straight", options);
+  const auto weak = temporalAcceptances(straight, options);
+  ASSERT_FALSE(weak.empty());
+  std::set<std::size_t> stops;
+  for (std::size_t i : weak) stops.insert(i - 1);  // the map reopens between anchor and frame
+  const auto resumed = run("temporal_resumed", options, stops);
+  ASSERT_EQ(resumed.size(), straight.size());
+  for (std::size_t i = 0; i < straight.size(); ++i) {
+    SCOPED_TRACE("frame " + std::to_string(i));
+    EXPECT_EQ(resumed[i].accepted, straight[i].accepted);
+    EXPECT_EQ(resumed[i].hypothesis, straight[i].hypothesis);
+    EXPECT_EQ(resumed[i].inliers, straight[i].inliers);
+  }
+}
+
+TEST(TemporalOptions, RangesAndRoundTrip) {
+  EXPECT_THROW(Options::fromSettings({{"temporal_max_gap", "0"}}), Error);
+  EXPECT_THROW(Options::fromSettings({{"temporal_min_inliers", "-1"}}), Error);
+  EXPECT_THROW(Options::fromSettings({{"temporal_radius", "101"}}), Error);
+  Options o = Options::fromSettings(
+      {{"temporal_min_inliers", "9"}, {"temporal_radius", "4"}, {"temporal_max_gap", "3"}});
+  EXPECT_EQ(o.temporal_min_inliers, 9);
+  EXPECT_EQ(o.temporal_radius, 4);
+  EXPECT_EQ(o.temporal_max_gap, 3);
+  EXPECT_EQ(Options::fromSettings(o.toSettings()).toSettings(), o.toSettings());
+  EXPECT_EQ(Options::paperPreset().temporal_min_inliers, 0) << "the papers verify nothing";
+}
+
+}  // namespace
+}  // namespace placedb::testing
