@@ -199,10 +199,11 @@ std::int64_t countOf(const std::string& path, const std::string& sql) {
 }
 
 // A map written by schema 2 (kd-forest as a split log, with the empty subtrees erased words left)
-// converts when reopened and keeps closing the sequence's loops. The conversion renumbers the
-// trees' nodes, and a split's random dimension is drawn from its node id, so from there on the
-// trees grow differently than in a run that never stopped: the runs are compared by the loops
-// they accept, not frame by frame. Once converted, a further stop changes nothing.
+// converts when reopened and keeps closing the sequence's loops. The log written here numbers the
+// nodes anew (in split order, as a log does), and a split's random dimension is drawn from its
+// node id, so from there on the trees grow differently than in a run that never stopped: the
+// runs are compared by the loops they accept, not frame by frame. Once converted, a further stop
+// changes nothing.
 TEST_P(ResumeTest, SchemaTwoMapConvertsAndResumes) {
   Options options;
   options.wm_max = GetParam();
