@@ -1,6 +1,7 @@
 #pragma once
 // Shared helpers of the engine tests: reading a data set's frame list and mapping frames.
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <filesystem>
 #include <fstream>
@@ -48,6 +49,31 @@ inline void removeMap(const std::filesystem::path& p) {
 }
 
 inline MapImpl& impl(Map& map) { return dynamic_cast<MapImpl&>(map); }
+
+// The first column of the first row of `sql` on the map, read-only; -1 when there is no row.
+inline std::int64_t sqlCount(const std::filesystem::path& map, const std::string& sql) {
+  sqlite3* db = nullptr;
+  EXPECT_EQ(sqlite3_open_v2(map.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_stmt* st = nullptr;
+  EXPECT_EQ(sqlite3_prepare_v2(db, sql.c_str(), -1, &st, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+  std::int64_t v = -1;
+  if (sqlite3_step(st) == SQLITE_ROW) v = sqlite3_column_int64(st, 0);
+  sqlite3_finalize(st);
+  sqlite3_close(db);
+  return v;
+}
+
+// Opens the map for frame `index` of a run that may have been stopped: a new session at the
+// first frame, the last session resumed otherwise.
+inline std::unique_ptr<Map> openForFrame(const std::filesystem::path& path, const Options& options,
+                                         std::size_t index, const std::string& source) {
+  auto map = Map::open(path.string(), options);
+  if (index == 0)
+    map->beginSession(source);
+  else
+    map->resumeSession(map->lastSession()->id);
+  return map;
+}
 
 // What a run must reproduce exactly when resumed.
 struct Outcome {

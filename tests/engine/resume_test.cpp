@@ -32,13 +32,7 @@ class ResumeTest : public ::testing::TestWithParam<int> {
     std::unique_ptr<Map> map;
     int stops = 0;
     for (std::size_t i = 0; i < seq_->images.size(); ++i) {
-      if (!map) {
-        map = Map::open(path.string(), options);
-        if (i == 0)
-          map->beginSession("rtabmap_samples");
-        else
-          map->resumeSession(map->lastSession()->id);
-      }
+      if (!map) map = openForFrame(path, options, i, "rtabmap_samples");
       out.push_back(outcomeOf(map->process(seq_->images[i], i, seq_->paths[i])));
       if (check_consistency) {
         std::string problem = impl(*map).checkConsistency();
@@ -186,18 +180,6 @@ void downgradeToSchemaTwo(const std::string& path) {
   sqlite3_close(db);
 }
 
-std::int64_t countOf(const std::string& path, const std::string& sql) {
-  sqlite3* db = nullptr;
-  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
-  sqlite3_stmt* st = nullptr;
-  EXPECT_EQ(sqlite3_prepare_v2(db, sql.c_str(), -1, &st, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
-  std::int64_t n = -1;
-  if (sqlite3_step(st) == SQLITE_ROW) n = sqlite3_column_int64(st, 0);
-  sqlite3_finalize(st);
-  sqlite3_close(db);
-  return n;
-}
-
 // A map written by schema 2 (kd-forest as a split log, with the empty subtrees erased words left)
 // converts when reopened and keeps closing the sequence's loops. The log written here numbers the
 // nodes anew (in split order, as a log does), and a split's random dimension is drawn from its
@@ -217,14 +199,14 @@ TEST_P(ResumeTest, SchemaTwoMapConvertsAndResumes) {
   };
   // Converted at the stop after 30 frames, stopped again after 60.
   auto once = run("converted_once_" + std::to_string(GetParam()), options, 30, true, converter(1));
-  EXPECT_EQ(countOf(map_path, "PRAGMA user_version"), 3);
+  EXPECT_EQ(sqlCount(map_path, "PRAGMA user_version"), 3);
   EXPECT_EQ(
-      countOf(map_path, "SELECT count(*) FROM engine_state WHERE key LIKE 'vocabulary.splits%'"),
+      sqlCount(map_path, "SELECT count(*) FROM engine_state WHERE key LIKE 'vocabulary.splits%'"),
       0);
-  EXPECT_GT(countOf(map_path, "SELECT count(*) FROM kd_nodes"), 50);
-  EXPECT_EQ(countOf(map_path,
-                    "SELECT count(*) FROM pragma_integrity_check WHERE "
-                    "integrity_check <> 'ok'"),
+  EXPECT_GT(sqlCount(map_path, "SELECT count(*) FROM kd_nodes"), 50);
+  EXPECT_EQ(sqlCount(map_path,
+                     "SELECT count(*) FROM pragma_integrity_check WHERE "
+                     "integrity_check <> 'ok'"),
             0);
 
   // The same conversion, then no further stop: equal to `once` frame by frame.

@@ -43,13 +43,7 @@ class TemporalTest : public ::testing::Test {
     std::vector<Frame> out;
     std::unique_ptr<Map> map;
     for (std::size_t i = 0; i < seq_->images.size(); ++i) {
-      if (!map) {
-        map = Map::open(path.string(), options);
-        if (i == 0)
-          map->beginSession("rtabmap_samples");
-        else
-          map->resumeSession(map->lastSession()->id);
-      }
+      if (!map) map = openForFrame(path, options, i, "rtabmap_samples");
       const FrameResult r = map->process(seq_->images[i], i, seq_->paths[i]);
       Frame f;
       f.accepted = r.hypothesis.accepted;
