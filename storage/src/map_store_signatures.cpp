@@ -387,7 +387,6 @@ void MapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
 
 std::vector<KdNodeRecord> MapStore::loadKdNodes() const {
   std::vector<KdNodeRecord> out;
-  if (schemaVersion() < 3) return out;  // a schema-2 map opened read-only: not migrated
   auto s = db_->cached(
       "SELECT tree, node, left_child, right_child, split_dim, split_value FROM kd_nodes "
       "ORDER BY tree, node");

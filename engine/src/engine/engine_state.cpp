@@ -3,7 +3,6 @@
 
 #include <fmt/format.h>
 
-#include <cstring>
 #include <nlohmann/json.hpp>
 
 #include "placedb/error.h"
@@ -13,23 +12,19 @@ namespace {
 
 constexpr const char* kCountersKey = "engine.counters";
 constexpr const char* kVocabularyHeaderKey = "vocabulary.header";
-constexpr std::size_t kSplitBytes = 1 + 4 + 2 + 4;
+constexpr std::size_t kSplitBytes = 1 + 4 + 2 + 4;  // a split-log record
 
 std::string chunkKey(std::size_t chunk) { return fmt::format("vocabulary.splits.{:06}", chunk); }
-
-template <typename T>
-T get(const std::uint8_t* at) {
-  T value;
-  std::memcpy(&value, at, sizeof(T));
-  return value;
-}
 
 }  // namespace
 
 void EngineCounters::save(storage::MapStore& store) const {
-  nlohmann::json j = {{"next_frame_id", next_frame_id},  {"next_location_id", next_location_id},
-                      {"feature_sum", feature_sum},      {"feature_frames", feature_frames},
-                      {"last_location", last_location},  {"last_session", last_session},
+  nlohmann::json j = {{"next_frame_id", next_frame_id},
+                      {"next_location_id", next_location_id},
+                      {"feature_sum", feature_sum},
+                      {"feature_frames", feature_frames},
+                      {"last_location", last_location},
+                      {"last_session", last_session},
                       {"previous_score", previous_score},
                       {"last_closure_location", last_closure_location},
                       {"last_closure_frame", last_closure_frame},
@@ -98,18 +93,10 @@ std::optional<vocab::IndexState> VocabularyStateWriter::load(const storage::MapS
   for (std::size_t chunk = 0;; ++chunk) {
     auto bytes = store.getState(chunkKey(chunk));
     if (!bytes) break;
-    if (bytes->size() % kSplitBytes != 0 || bytes->size() > kSplitsPerChunk * kSplitBytes)
+    if (bytes->size() > kSplitsPerChunk * kSplitBytes ||
+        !vocab::appendSplitRecords(bytes->data(), bytes->size(), &state.legacy_splits))
       throw Error(ErrorCode::kMapRefused,
                   fmt::format("{}: vocabulary state chunk {} is damaged", store.path(), chunk));
-    for (std::size_t at = 0; at < bytes->size(); at += kSplitBytes) {
-      const std::uint8_t* p = bytes->data() + at;
-      vocab::SplitRecord s;
-      s.tree = get<std::uint8_t>(p);
-      s.node = get<std::uint32_t>(p + 1);
-      s.dim = get<std::uint16_t>(p + 5);
-      s.value = get<float>(p + 7);
-      state.legacy_splits.push_back(s);
-    }
     legacy_chunks_ = chunk + 1;
   }
   if (legacy_chunks_ > 0) saved_next_word_id_ = -1;  // rewrite the header in the new format

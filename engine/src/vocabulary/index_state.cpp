@@ -43,6 +43,7 @@ class Reader {
     return value;
   }
   std::size_t remaining() const { return in_.size() - at_; }
+  const std::uint8_t* position() const { return in_.data() + at_; }
   [[noreturn]] static void fail(const std::string& why) {
     throw Error(ErrorCode::kInvalidArgument, "vocabulary index state: " + why);
   }
@@ -53,6 +54,20 @@ class Reader {
 };
 
 }  // namespace
+
+bool appendSplitRecords(const std::uint8_t* data, std::size_t size, std::vector<SplitRecord>* out) {
+  if (size % kSplitBytes != 0) return false;
+  out->reserve(out->size() + size / kSplitBytes);
+  for (const std::uint8_t* p = data; p < data + size; p += kSplitBytes) {
+    SplitRecord s;
+    std::memcpy(&s.tree, p, 1);
+    std::memcpy(&s.node, p + 1, 4);
+    std::memcpy(&s.dim, p + 5, 2);
+    std::memcpy(&s.value, p + 7, 4);
+    out->push_back(s);
+  }
+  return true;
+}
 
 std::vector<std::uint8_t> IndexState::serialize() const {
   if (!legacy_splits.empty())
@@ -99,13 +114,7 @@ IndexState IndexState::deserialize(const std::vector<std::uint8_t>& bytes) {
     Reader::fail("record count does not match the size");
   }
   if (version == kSplitLogVersion) {
-    s.legacy_splits.resize(count);
-    for (SplitRecord& split : s.legacy_splits) {
-      split.tree = r.get<std::uint8_t>();
-      split.node = r.get<std::uint32_t>();
-      split.dim = r.get<std::uint16_t>();
-      split.value = r.get<float>();
-    }
+    appendSplitRecords(r.position(), r.remaining(), &s.legacy_splits);  // whole records: checked
     return s;
   }
   s.nodes.resize(count);

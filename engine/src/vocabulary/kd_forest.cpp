@@ -77,39 +77,6 @@ void KdForest::insert(std::uint32_t slot) {
   }
 }
 
-void KdForest::insertAllWithoutSplitting(const std::vector<std::uint32_t>& slots) {
-  if (seen_.size() < store_->slotCount()) seen_.resize(store_->slotCount(), 0);
-  auto fill = [&](Tree& tree) {
-    // Routing is the cost (a walk down a deep tree per point); doing it once per point and
-    // sizing the buckets first spares the reallocations of growing them one point at a time.
-    std::vector<std::int32_t> leaf(slots.size());
-    std::vector<std::uint32_t> added(tree.nodes.size(), 0);
-    for (std::size_t i = 0; i < slots.size(); ++i) {
-      leaf[i] = leafOf(tree, store_->data(slots[i]));
-      ++added[static_cast<std::size_t>(leaf[i])];
-    }
-    for (std::size_t n = 0; n < added.size(); ++n)
-      if (added[n]) tree.nodes[n].bucket.reserve(tree.nodes[n].bucket.size() + added[n]);
-    for (std::size_t i = 0; i < slots.size(); ++i)
-      tree.nodes[static_cast<std::size_t>(leaf[i])].bucket.push_back(slots[i]);
-  };
-  // Trees share nothing but the read-only descriptors, so they fill in parallel; each tree's
-  // buckets get their points in the given order whatever the scheduling.
-  const std::size_t workers =
-      std::min<std::size_t>(trees_.size(), std::max(1u, std::thread::hardware_concurrency()));
-  if (workers <= 1 || slots.size() < 4096) {
-    for (Tree& tree : trees_) fill(tree);
-    return;
-  }
-  std::vector<std::thread> threads;
-  for (std::size_t w = 1; w < workers; ++w)
-    threads.emplace_back([&, w] {
-      for (std::size_t t = w; t < trees_.size(); t += workers) fill(trees_[t]);
-    });
-  for (std::size_t t = 0; t < trees_.size(); t += workers) fill(trees_[t]);
-  for (auto& thread : threads) thread.join();
-}
-
 KdForest::BackgroundFill::BackgroundFill(KdForest* forest) : forest_(forest) {
   const std::size_t trees = forest->trees_.size();
   const std::size_t workers =

@@ -16,8 +16,8 @@
 // points, not every word ever inserted, and freed nodes are reused lowest index first.
 //
 // Persisting the forest needs its internal nodes (ForestNode) and the set of live points:
-// loadNodes() + insertAllWithoutSplitting() of the live points rebuild the same trees with the
-// same bucket contents and the same free nodes. takeChanges() hands out only the nodes that
+// loadNodes() + a BackgroundFill of the live points rebuild the same trees with the same bucket
+// contents and the same free nodes. takeChanges() hands out only the nodes that
 // changed since the last call, so an engine can update its stored copy per frame. Search results
 // never depend on the order inside a bucket (whole buckets are examined; ties on distance go to
 // the smaller word id).
@@ -88,14 +88,11 @@ class KdForest {
   KdForest(const SlotStore* store, int trees, int leaf_size, std::uint64_t seed);
 
   void insert(std::uint32_t slot);
-  // Used by restore: the loaded nodes already hold every split the live points caused, so the
-  // points only go to their buckets, in the given order. Trees fill in parallel.
-  void insertAllWithoutSplitting(const std::vector<std::uint32_t>& slots);
-
-  // insertAllWithoutSplitting() fed run by run while the caller still loads descriptors: runs go
-  // to their buckets on background threads, each tree taking them in the order added, so the
-  // result equals one insertAllWithoutSplitting() of all runs. The store must not move the
-  // descriptors of added slots (SlotStore chunks do not move). finish() waits for the threads.
+  // Used by restore, fed run by run while the caller still loads descriptors: the loaded nodes
+  // already hold every split the live points caused, so the points only go to their buckets,
+  // without splitting. Runs go down the trees on background threads, each tree taking them in
+  // the order added. The store must not move the descriptors of added slots (SlotStore chunks do
+  // not move). finish() waits for the threads.
   class BackgroundFill {
    public:
     explicit BackgroundFill(KdForest* forest);

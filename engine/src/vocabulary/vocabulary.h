@@ -87,6 +87,11 @@ struct IndexState {
   bool operator==(const IndexState& o) const;
 };
 
+// Appends the records of a schema-2 split log (11 bytes each: tree, node, dim, value, as IndexState
+// version 1 and the engine's split-log chunks hold them) to `out`; false, appending nothing, when
+// `size` is not a whole number of records.
+bool appendSplitRecords(const std::uint8_t* data, std::size_t size, std::vector<SplitRecord>* out);
+
 class Vocabulary {
  public:
   Vocabulary(VocabularyOptions options, int dim, std::string extractor_signature);
