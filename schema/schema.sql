@@ -1,4 +1,4 @@
--- placedb map schema: the current version (2), as one file.
+-- placedb map schema: the current version (4), as one file.
 -- It must equal the result of applying migrations/0001..N in order; a test compares
 -- sqlite_master of both. `sqlite3 new.db < schema/schema.sql` makes an empty placedb map.
 -- See schema/SCHEMA.md for the meaning of every table, column and view.
@@ -209,7 +209,20 @@ SELECT tree, count(*) AS internal_nodes, count(*) + 1 AS leaves,
        count(DISTINCT split_dim) AS split_dimensions
 FROM kd_nodes GROUP BY tree;
 
+-- Place codes: a compact global descriptor of every location, in every tier (signed bytes).
+CREATE TABLE place_codes (
+  location_id INTEGER PRIMARY KEY REFERENCES locations (id) ON DELETE CASCADE,
+  code BLOB NOT NULL
+);
+
+-- The order in which locations entered STM/WM (a location retrieved from LTM enters again): the
+-- transfer order's age. A location without a row (made before schema 4) has its id as age.
+CREATE TABLE wm_entries (
+  location_id INTEGER PRIMARY KEY REFERENCES locations (id) ON DELETE CASCADE,
+  wm_age INTEGER NOT NULL
+);
+
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 3;
+PRAGMA user_version = 4;
 COMMIT;

@@ -15,6 +15,7 @@ target_sources(placedb_storage PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/map_file_check.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/migrations.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_store.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/map_store_memory.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_store_signatures.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/records.cpp
   ${PLACEDB_MIGRATIONS_CPP})

@@ -82,6 +82,7 @@ struct Outcome {
   double posterior = 0, score = 0;
   bool accepted = false;
   std::size_t wm = 0, stm = 0, vocabulary = 0, transferred = 0, retrieved = 0;
+  std::size_t retrieved_by_search = 0;
 };
 
 inline Outcome outcomeOf(const FrameResult& r) {
@@ -90,7 +91,7 @@ inline Outcome outcomeOf(const FrameResult& r) {
           r.hypothesis.score, r.hypothesis.accepted,
           r.wm_size,          r.stm_size,
           r.vocabulary_size,  r.transferred,
-          r.retrieved};
+          r.retrieved,        r.retrieved_by_search};
 }
 
 }  // namespace placedb::testing

@@ -62,6 +62,7 @@ class ResumeTest : public ::testing::TestWithParam<int> {
       EXPECT_EQ(a[i].vocabulary, b[i].vocabulary);
       EXPECT_EQ(a[i].transferred, b[i].transferred);
       EXPECT_EQ(a[i].retrieved, b[i].retrieved);
+      EXPECT_EQ(a[i].retrieved_by_search, b[i].retrieved_by_search);
     }
   }
 
@@ -75,10 +76,11 @@ TEST_P(ResumeTest, StoppedEveryTenthFrameEqualsStraightRun) {
   auto split = run("split" + std::to_string(GetParam()), options, 10, false);
   expectSame(straight, split);
 
-  std::size_t transferred = 0, retrieved = 0, accepted = 0;
+  std::size_t transferred = 0, retrieved = 0, accepted = 0, found = 0;
   for (const auto& o : straight) {
     transferred += o.transferred;
     retrieved += o.retrieved;
+    found += o.retrieved_by_search;
     accepted += o.accepted;
   }
   EXPECT_GT(accepted, 10u) << "the sequence should close loops";
@@ -86,6 +88,7 @@ TEST_P(ResumeTest, StoppedEveryTenthFrameEqualsStraightRun) {
     // The bound must really move locations both ways, or the test proves nothing about tiers.
     EXPECT_GT(transferred, 0u);
     EXPECT_GT(retrieved, 0u);
+    EXPECT_GT(found, 0u) << "the LTM search must bring places back, or its resume is untested";
     for (const auto& o : straight) EXPECT_LE(o.wm, static_cast<std::size_t>(GetParam()));
   }
 }
@@ -175,6 +178,9 @@ void downgradeToSchemaTwo(const std::string& path) {
   sqlite3_finalize(st);
   exec("DROP VIEW v_kd_trees");
   exec("DROP TABLE kd_nodes");
+  exec("DROP TABLE place_codes");  // schema 4
+  exec("DROP TABLE wm_entries");
+  exec("DELETE FROM engine_state WHERE key = 'place_codes.centres'");
   exec("PRAGMA user_version = 2");
   exec("COMMIT");
   sqlite3_close(db);
@@ -199,7 +205,7 @@ TEST_P(ResumeTest, SchemaTwoMapConvertsAndResumes) {
   };
   // Converted at the stop after 30 frames, stopped again after 60.
   auto once = run("converted_once_" + std::to_string(GetParam()), options, 30, true, converter(1));
-  EXPECT_EQ(sqlCount(map_path, "PRAGMA user_version"), 3);
+  EXPECT_EQ(sqlCount(map_path, "PRAGMA user_version"), storage::MapStore::currentSchemaVersion());
   EXPECT_EQ(
       sqlCount(map_path, "SELECT count(*) FROM engine_state WHERE key LIKE 'vocabulary.splits%'"),
       0);

@@ -88,7 +88,8 @@ TEST(MemoryTiers, TransfersLowestWeightThenOldestAndRespectsImmunity) {
   EXPECT_EQ(wmWithWeights(weights, s).transferCandidates(100, {}),
             (std::vector<MemoryLocationId>{2, 4, 3, 1}));
 
-  // Transferred locations go to LTM; retrieved ones are immune for the rest of their frame.
+  // Transferred locations go to LTM; retrieved ones are immune for the rest of their frame, and
+  // after it rank as the newest to enter WM (2 goes after 5 and 8 of the same weight).
   m.transferToLtm({2, 4});
   EXPECT_EQ(m.tierOf(2), Tier::kLtm);
   EXPECT_EQ(m.ltm(), (std::vector<MemoryLocationId>{2, 4}));
@@ -96,8 +97,11 @@ TEST(MemoryTiers, TransfersLowestWeightThenOldestAndRespectsImmunity) {
   m.retrieveToWm({2});
   EXPECT_EQ(m.tierOf(2), Tier::kWm);
   EXPECT_EQ(m.transferCandidates(2, {}), (std::vector<MemoryLocationId>{5, 8}));
+  const std::int64_t age_before = m.ageOf(8);
   m.beginFrame();
-  EXPECT_EQ(m.transferCandidates(2, {}), (std::vector<MemoryLocationId>{2, 5}));
+  EXPECT_GT(m.ageOf(2), age_before);
+  EXPECT_EQ(m.transferCandidates(2, {}), (std::vector<MemoryLocationId>{5, 8}));
+  EXPECT_EQ(m.transferCandidates(3, {}), (std::vector<MemoryLocationId>{5, 8, 2}));
   EXPECT_THROW(m.transferToLtm({4}), Error);  // already in LTM
   const MemorySnapshot before = m.snapshot();
   EXPECT_THROW(m.transferToLtm({5, 5}), Error);  // refused whole: 5 stays in WM
@@ -126,6 +130,20 @@ TEST(MemoryTiers, PlannedTransfersFollowSizeAndTimeTriggers) {
   MemoryTiers capped(s);
   for (MemoryLocationId id = 0; id < 14; ++id) capped.push(id);
   EXPECT_EQ(capped.plannedTransfers(1.4), 3u);
+  // The time trigger never takes WM below its floor; the size trigger is not bound by it.
+  s.max_transfers_per_frame = 0;
+  s.time_floor = 12;
+  MemoryTiers floored(s);
+  for (MemoryLocationId id = 0; id < 14; ++id) floored.push(id);
+  EXPECT_EQ(floored.plannedTransfers(1.4), 2u);
+  s.time_floor = 20;
+  MemoryTiers under(s);
+  for (MemoryLocationId id = 0; id < 14; ++id) under.push(id);
+  EXPECT_EQ(under.plannedTransfers(10.0), 0u);
+  s.wm_max = 10;
+  MemoryTiers sized(s);
+  for (MemoryLocationId id = 0; id < 14; ++id) sized.push(id);
+  EXPECT_EQ(sized.plannedTransfers(10.0), 4u);
 }
 
 TEST(MemoryTiers, RetrievalCandidatesAreLtmNeighboursUpToTheCap) {

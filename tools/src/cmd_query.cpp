@@ -32,6 +32,10 @@ Options storedOptions(const std::string& map_path) {
   return Options::fromSettings(store.settings(last->id));
 }
 
+const char* tierName(Tier tier) {
+  return tier == Tier::kStm ? "stm" : tier == Tier::kWm ? "wm" : "ltm";
+}
+
 nlohmann::json framesJson(const std::vector<FrameRef>& frames) {
   nlohmann::json list = nlohmann::json::array();
   for (const auto& f : frames)
@@ -61,22 +65,32 @@ int runQuery(const QueryRequest& request) {
       nlohmann::json matches = nlohmann::json::array();
       for (const auto& m : result.matches)
         matches.push_back({{"location", m.location_id},
+                           {"tier", tierName(m.tier)},
                            {"similarity", m.similarity},
+                           {"code_similarity", m.code_similarity},
+                           {"inliers", m.inliers},
+                           {"verified", m.verified},
                            {"frames", framesJson(m.frames)}});
       out.push_back({{"image", image_path},
+                     {"verdict", toString(result.verdict)},
                      {"feature_count", result.feature_count},
+                     {"searched", result.searched},
+                     {"checked", result.checked},
                      {"time_ms", result.time_ms},
                      {"matches", matches}});
       continue;
     }
     std::string text =
-        fmt::format("{}: {} features, {:.1f} ms, {} match{}\n", image_path, result.feature_count,
-                    result.time_ms, result.matches.size(), result.matches.size() == 1 ? "" : "es");
+        fmt::format("{}: {} place; {} features, {} locations searched, {} checked, {:.1f} ms\n",
+                    image_path, toString(result.verdict), result.feature_count, result.searched,
+                    result.checked, result.time_ms);
     for (std::size_t i = 0; i < result.matches.size(); ++i) {
       const QueryMatch& m = result.matches[i];
-      text +=
-          fmt::format("  {}. location {}  similarity {:.4f}  ({} frame{})\n", i + 1, m.location_id,
-                      m.similarity, m.frames.size(), m.frames.size() == 1 ? "" : "s");
+      text += fmt::format(
+          "  {}. location {} ({})  inliers {}{}  code similarity {:.3f}  similarity {:.4f}  "
+          "({} frame{})\n",
+          i + 1, m.location_id, tierName(m.tier), m.inliers, m.verified ? " verified" : "",
+          m.code_similarity, m.similarity, m.frames.size(), m.frames.size() == 1 ? "" : "s");
       for (const auto& f : m.frames)
         text += fmt::format("       session {} frame {}  {}\n", f.session_id, f.source_index,
                             f.source_path);
@@ -94,9 +108,15 @@ Command addQueryCommand(CLI::App& parent) {
   CLI::App* app =
       parent.add_subcommand("query", "Localise images against a map without changing it");
   app->footer(
-      "Compare each IMAGE with every location stored in MAP (any memory tier) and print the\n"
-      "best locations with their similarity, the frames they cover and those frames' paths.\n"
-      "The map is opened read-only with the settings of its last session.\n"
+      "Compare each IMAGE with every location stored in MAP, in every memory tier, and say\n"
+      "whether it shows a known place. Candidates are the locations most like the image by\n"
+      "bag of words (short-term and working memory) and by place code (every tier, long-term\n"
+      "memory included); each goes through the geometric check against its stored keypoints.\n"
+      "Verdict: 'known' when the best candidate passes the check (geometry_min_inliers),\n"
+      "'unknown' when none does, 'unverified' when the map's settings switch the check off.\n"
+      "Prints the best locations (verified first, by inliers), their tier, the frames they\n"
+      "cover and how many locations were searched. The map is opened read-only with the\n"
+      "settings of its last session.\n"
       "Exit status 3 when an image cannot be read (the others are still answered).\n\n"
       "Examples:\n"
       "  placedb query run.placedb photo.jpg\n"

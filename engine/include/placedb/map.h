@@ -61,6 +61,7 @@ struct FrameResult {
   std::size_t vocabulary_size = 0;  // words in the kd-index (STM + WM)
   std::size_t stm_size = 0, wm_size = 0;
   std::size_t transferred = 0, retrieved = 0;  // tier moves this frame
+  std::size_t retrieved_by_search = 0;          // of the retrieved, found by the LTM search
   double mean_quantisation_error = 0;
 };
 
@@ -73,15 +74,30 @@ struct SessionInfo {
   std::optional<std::int64_t> last_source_index;  // of the last committed frame
 };
 
+// Where a location sits: short-term or working memory (RAM and file) or long-term memory (file).
+enum class Tier : std::uint8_t { kStm = 0, kWm = 1, kLtm = 2 };
+
 struct QueryMatch {  // localisation: a stored location that resembles the query image
   std::int64_t location_id = 0;
-  double similarity = 0;  // eq. 5 against the location's signature
+  Tier tier = Tier::kWm;
+  double similarity = 0;       // eq. 5 against the location's signature; 0 for LTM (no words in RAM)
+  double code_similarity = 0;  // cosine of the place codes, any tier
+  int inliers = 0;             // the geometric check's epipolar inliers (0 when it did not run)
+  bool verified = false;       // inliers reach geometry_min_inliers
   std::vector<FrameRef> frames;
 };
 
+// A query's answer: kKnown when its best match passed the geometric check, kUnknown when none
+// of the candidates did, kUnverified when the map's settings switch the check off.
+enum class QueryVerdict { kKnown, kUnknown, kUnverified };
+const char* toString(QueryVerdict verdict);
+
 struct QueryResult {
   std::size_t feature_count = 0;
-  std::vector<QueryMatch> matches;  // best first
+  QueryVerdict verdict = QueryVerdict::kUnknown;
+  std::vector<QueryMatch> matches;  // best first: verified ones by inliers, then by similarity
+  std::size_t searched = 0;         // locations compared with the image, all tiers
+  std::size_t checked = 0;          // candidates that went through the geometric check
   double time_ms = 0;
 };
 

@@ -32,8 +32,13 @@ struct Options {
   int stm_size = 20;                   // newest locations that are never loop candidates
   double t_sim = 0.2;                  // merge into the previous location above this similarity
   int wm_max = 0;                      // WM size limit, 0 = unbounded
-  double t_time_ms = 0;                // frame-time limit that triggers transfer, 0 = off
-  int max_retrieved = 2;               // LTM neighbours brought back per frame
+  double t_time_ms = 0;                // limit on the frame's memory-bound stages (LTM search,
+                                       // likelihood, filter update, retrieval) that triggers
+                                       // transfer, 0 = off; features and verification excluded
+  int wm_min = 100;                    // the time limit never shrinks WM below this
+  int max_retrieved = 2;               // LTM neighbours of the hypothesis brought back per frame
+  int ltm_search = 5;                  // places most like the frame by place code (WM and LTM);
+                                       // those in LTM come back to WM first, 0 = off
   int wm_immune_newest = 0;            // newest WM locations never transferred (at least)
   double wm_recent_ratio = 0.2;        // ... or this share of WM, whichever is more
 

@@ -124,9 +124,16 @@ const std::vector<Row>& table() {
       integer("wm_max", &Options::wm_max, 0, 100000000, "0..1e8",
               "working-memory size that triggers transfer to LTM, 0 = unbounded"),
       real("t_time_ms", &Options::t_time_ms, 0, kInf, ">= 0",
-           "frame time that triggers transfer to LTM, in ms, 0 = off"),
+           "time budget in ms of the stages that grow with memory (LTM search, likelihood, "
+           "filter update, retrieval; not features nor verification): above it WM locations "
+           "move to LTM, 0 = off"),
+      integer("wm_min", &Options::wm_min, 0, 100000000, "0..1e8",
+              "the time budget never shrinks working memory below this many locations"),
       integer("max_retrieved", &Options::max_retrieved, 0, 1000, "0..1000",
               "LTM neighbours of the best hypothesis brought back per frame"),
+      integer("ltm_search", &Options::ltm_search, 0, 1000, "0..1000",
+              "places most like the frame by place code, WM and LTM; those in LTM are brought "
+              "back before the filter runs, 0 = off"),
       integer("wm_immune_newest", &Options::wm_immune_newest, 0, 100000, "0..100000",
               "newest WM locations never transferred (at least)"),
       real("wm_recent_ratio", &Options::wm_recent_ratio, 0, 1, "0..1",

@@ -28,7 +28,8 @@ void EngineCounters::save(storage::MapStore& store) const {
                       {"previous_score", previous_score},
                       {"last_closure_location", last_closure_location},
                       {"last_closure_frame", last_closure_frame},
-                      {"last_closure_session", last_closure_session}};
+                      {"last_closure_session", last_closure_session},
+                      {"next_wm_age", next_wm_age}};
   store.putState(kCountersKey, j.dump());
 }
 
@@ -48,6 +49,8 @@ bool EngineCounters::load(const storage::MapStore& store) {
     last_closure_location = j.value("last_closure_location", std::int64_t{0});
     last_closure_frame = j.value("last_closure_frame", std::int64_t{0});
     last_closure_session = j.value("last_closure_session", std::int64_t{0});
+    // Absent from maps made before schema 4, whose ages were the location ids.
+    next_wm_age = j.value("next_wm_age", next_location_id);
   } catch (const nlohmann::json::exception& e) {
     throw Error(ErrorCode::kMapRefused, fmt::format("{}: engine state '{}' is damaged: {}",
                                                     store.path(), kCountersKey, e.what()));

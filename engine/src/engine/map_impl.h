@@ -14,6 +14,8 @@
 #include "filter/inverted_index.h"
 #include "filter/link_graph.h"
 #include "memory/memory_tiers.h"
+#include "memory/place_code.h"
+#include "memory/place_index.h"
 #include "placedb/map.h"
 #include "placedb/storage/map_store.h"
 #include "vocabulary/vocabulary.h"
@@ -26,6 +28,8 @@ std::string keypointDescriptorsKey(std::int64_t location_id);
 // mode ("fixed" or "seed"; absent without an import).
 inline constexpr const char* kMapExtractorKey = "map.extractor";
 inline constexpr const char* kVocabularyModeKey = "vocabulary.mode";
+// Engine-state key of the place codes' coarse centres (memory/place_code.h).
+inline constexpr const char* kPlaceCoderKey = "place_codes.centres";
 
 class MapImpl final : public Map {
  public:
@@ -60,8 +64,31 @@ class MapImpl final : public Map {
   void requireWritable(const char* what) const;
   SessionInfo toInfo(const storage::SessionRecord& record) const;
 
+  // One frame, as named steps: quantise -> place in STM -> search LTM -> likelihood and filter
+  // -> decide the loop closure -> manage memory -> commit.
   FrameResult processFeatures(const Features& features, std::int64_t source_index,
                               const std::string& source_path, double features_ms);
+  struct Quantised {
+    Signature signature;
+    std::vector<std::int64_t> word_of_feature;  // -1 where a feature got no word
+    std::vector<std::int64_t> created_words;
+  };
+  Quantised quantise(const Features& features, FrameResult& result, FrameWrite& write);
+  // Merges the frame into the newest location or makes a new one (with its place code).
+  void placeInShortTermMemory(const Features& features, const Quantised& q, FrameResult& result,
+                              FrameWrite& write);
+  // Brings back the LTM locations whose place codes rank among the ltm_search most like the frame.
+  void searchLongTermMemory(const Features& features, FrameWrite& write, FrameResult& result);
+  // Verifies the filter's outcome and records the decision; returns the reported hypothesis.
+  std::int64_t decideLoopClosure(const FilterOutcome& outcome, const Features& features,
+                                 const std::vector<LocationSimilarity>& similarities,
+                                 FrameResult& result, FrameWrite& write);
+  void acceptLoopClosure(std::int64_t hypothesis, bool temporal, FrameResult& result,
+                         FrameWrite& write);
+  // Retrieval around the hypothesis, then transfer; memory_ms is this frame's time in the
+  // stages that grow with memory, which the time budget (t_time_ms) bounds.
+  void manageMemory(std::int64_t hypothesis, double memory_ms, FrameWrite& write,
+                    FrameResult& result);
   FrameResult recordBad(std::int64_t source_index, const std::string& source_path,
                         std::size_t feature_count, const StageTimes& times);
   // Picks the reported hypothesis among the filter's best and its WM neighbours and verifies
@@ -70,7 +97,7 @@ class MapImpl final : public Map {
     std::int64_t location = 0;  // kNewPlace (-1) when there is none
     bool passed = false;        // the geometric check (or no check) let it through
     int inliers = 0;
-    int matches = 0;  // descriptor matches behind the inliers
+    int matches = 0;        // descriptor matches behind the inliers
     bool temporal = false;  // passed on temporal_min_inliers, near the last accepted closure
   };
   Verified verifyHypothesis(const FilterOutcome& outcome, const Features& features,
@@ -81,6 +108,10 @@ class MapImpl final : public Map {
   std::vector<LocationId> nearLastClosure(std::int64_t frame_id) const;
   GeometricView viewOf(std::int64_t location_id, const std::vector<storage::WordRef>& refs) const;
   void retrieveNeighbours(std::int64_t hypothesis, FrameWrite& write, FrameResult& result);
+  // Moves LTM locations back to WM: signatures, missing words, links, ages.
+  void bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write, FrameResult& result);
+  void storePlaceCode(std::int64_t location_id, const Features& features, FrameWrite& write);
+  const std::vector<std::int8_t>& frameCode(const Features& features);
   void transferToLtm(std::int64_t hypothesis, double frame_seconds, FrameWrite& write,
                      FrameResult& result);
   void enterWorkingMemory(const std::vector<std::int64_t>& ids, FrameWrite& write);
@@ -97,6 +128,9 @@ class MapImpl final : public Map {
   LinkGraph graph_;      // links among STM and WM locations
   std::unique_ptr<MemoryTiers> tiers_;
   std::unique_ptr<BayesFilter> filter_;
+  std::optional<PlaceCoder> coder_;  // absent until the map's first location
+  PlaceIndex places_;                // the place code of every location, every tier
+  std::optional<std::vector<std::int8_t>> frame_code_;  // the current frame's, once computed
   EngineCounters counters_;
   VocabularyStateWriter vocabulary_state_;
   std::vector<std::int64_t> imported_words_;  // ascending; never leave the index

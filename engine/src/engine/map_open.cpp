@@ -59,16 +59,19 @@ void MapImpl::restoreFromStore() {
   counters_ = EngineCounters();
   counters_.load(*store_);
 
-  // Tiers: age is the creation order, which location ids follow.
+  // Tiers, with their ages in the transfer order (the location id on maps before schema 4).
   MemorySnapshot snapshot;
-  snapshot.next_age = counters_.next_location_id;
+  snapshot.next_age = counters_.next_wm_age;
+  const auto ages = store_->wmAges();
   const std::pair<storage::Tier, Tier> tiers[] = {{storage::Tier::kSTM, Tier::kStm},
                                                   {storage::Tier::kWM, Tier::kWm},
                                                   {storage::Tier::kLTM, Tier::kLtm}};
   std::vector<std::int64_t> live;  // STM and WM
   for (auto [stored, tier] : tiers) {
     for (const auto& row : store_->locationsInTier(stored)) {
-      snapshot.locations.push_back({row.id, tier, row.weight, row.id});
+      const auto age = ages.find(row.id);
+      snapshot.locations.push_back(
+          {row.id, tier, row.weight, age == ages.end() ? row.id : age->second});
       if (tier == Tier::kStm) snapshot.stm.push_back(row.id);
       if (tier != Tier::kLtm) live.push_back(row.id);
     }
@@ -124,6 +127,19 @@ void MapImpl::restoreFromStore() {
       std::int64_t other = link.location_a == id ? link.location_b : link.location_a;
       if (link.type != storage::LinkType::kMerge && live_set.count(other))
         graph_.addLink(id, other);
+    }
+  }
+
+  // Place codes of every tier, and the centres that made them.
+  coder_.reset();
+  places_.clear();
+  if (auto centres = store_->getState(kPlaceCoderKey)) {
+    try {
+      coder_ = PlaceCoder::fromBytes(*centres, extractor_->dim());
+      for (const auto& record : store_->placeCodes()) places_.add(record.location_id, record.code);
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::kInvalidArgument) throw;
+      throw Error(ErrorCode::kMapRefused, store_->path() + ": " + e.what());
     }
   }
 

@@ -35,6 +35,9 @@ struct MapImpl::FrameWrite {
   std::optional<std::pair<std::int64_t, std::int64_t>> weight;  // location, new weight
   std::vector<std::int64_t> to_wm, to_ltm;
   std::optional<storage::HypothesisRecord> hypothesis;
+  std::optional<std::vector<std::int8_t>> place_code;       // the new location's
+  std::vector<std::uint8_t> place_coder;                    // the centres, once per map
+  std::vector<std::pair<std::int64_t, std::int64_t>> ages;  // locations entering STM/WM
 };
 
 FrameResult MapImpl::process(const cv::Mat& image, std::int64_t source_index,
@@ -80,10 +83,8 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
                                      const std::string& source_path, double features_ms) {
   const auto start = Clock::now() - std::chrono::duration_cast<Clock::duration>(
                                         std::chrono::duration<double, std::milli>(features_ms));
-  auto stage = Clock::now();
   StageTimes times;
   times.features = features_ms;
-
   const double mean_features =
       counters_.feature_frames ? double(counters_.feature_sum) / counters_.feature_frames : 0.0;
   if (features.size() == 0 || double(features.size()) < options_.bad_ratio * mean_features) {
@@ -94,6 +95,7 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
   counters_.feature_frames += 1;
 
   tiers_->beginFrame();
+  frame_code_.reset();
   FrameResult r;
   FrameWrite w;
   r.frame_id = counters_.next_frame_id++;
@@ -102,7 +104,41 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
   r.feature_count = features.size();
   w.frame.id = r.frame_id;
 
-  // Quantisation: every feature gets a word; new words enter the index at once.
+  auto stage = Clock::now();
+  const Quantised q = quantise(features, r, w);
+  times.quantisation = msSince(stage);
+
+  placeInShortTermMemory(features, q, r, w);
+  stage = Clock::now();
+  searchLongTermMemory(features, w, r);
+  const double search_ms = msSince(stage);
+
+  stage = Clock::now();
+  auto similarities = index_.similarities(
+      q.signature, [this](LocationId id) { return tiers_->tierOf(id) == Tier::kWm; });
+  times.likelihood = msSince(stage);
+
+  stage = Clock::now();
+  FilterOutcome outcome = filter_->update(tiers_->wm(), similarities, graph_);
+  counters_.previous_score = filter_->state().previous_score;
+  const double update_ms = msSince(stage);
+  const std::int64_t hypothesis = decideLoopClosure(outcome, features, similarities, r, w);
+  times.filter = msSince(stage);
+
+  stage = Clock::now();
+  // The time budget counts only the stages whose cost grows with memory.
+  manageMemory(hypothesis, search_ms + times.likelihood + update_ms, w, r);
+  times.memory = search_ms + msSince(stage);
+
+  r.times = times;
+  commit(w, r, source_path);
+  if (hypothesis != kNewPlace) r.hypothesis.frames = framesOf(hypothesis);
+  return r;
+}
+
+MapImpl::Quantised MapImpl::quantise(const Features& features, FrameResult& r, FrameWrite& w) {
+  Quantised out;
+  // Every feature gets a word; new words enter the index at once.
   vocab::Quantization q = vocabulary_->quantize(features.descriptors, r.frame_id);
   for (std::int64_t id : q.created_words)
     w.words.push_back(storage::WordRecord::fromFloats(id, r.frame_id, vocabulary_->descriptor(id),
@@ -111,17 +147,22 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
   word_ids.reserve(q.word_of_feature.size());
   for (std::int64_t id : q.word_of_feature)
     if (id >= 0) word_ids.push_back(id);
-  Signature signature = Signature::fromWords(word_ids);
+  out.signature = Signature::fromWords(word_ids);
   r.words_created = q.created_words.size();
   r.mean_quantisation_error = q.mean_error;
-  times.quantisation = msSince(stage);
+  out.created_words = std::move(q.created_words);
+  out.word_of_feature = std::move(q.word_of_feature);
+  return out;
+}
 
-  // Short-term memory: merge into the newest location when similar enough, else a new location.
+void MapImpl::placeInShortTermMemory(const Features& features, const Quantised& q, FrameResult& r,
+                                     FrameWrite& w) {
+  // Merge into the newest location when similar enough, else a new location.
   std::int64_t previous = counters_.last_session == *session_id_ ? counters_.last_location : 0;
   bool previous_live =
       previous && tiers_->contains(previous) && tiers_->tierOf(previous) != Tier::kLtm;
   if (previous_live && tiers_->tierOf(previous) == Tier::kStm &&
-      similarity(signature, index_.signatureOf(previous)) > options_.t_sim) {
+      similarity(q.signature, index_.signatureOf(previous)) > options_.t_sim) {
     r.outcome = FrameOutcome::kMerged;
     r.location_id = previous;
     tiers_->addWeight(previous, 1);
@@ -131,7 +172,7 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
   } else {
     r.outcome = FrameOutcome::kNewLocation;
     r.location_id = counters_.next_location_id++;
-    index_.add(r.location_id, signature);
+    index_.add(r.location_id, q.signature);
     graph_.addNode(r.location_id);
     if (previous_live) {
       graph_.addLink(previous, r.location_id);
@@ -149,29 +190,27 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
     }
     if (options_.geometry_min_inliers > 0 && features.descriptors.type() == CV_32F)
       w.keypoint_descriptors = encodeDescriptors(kept);
-    enterWorkingMemory(tiers_->push(r.location_id), w);
+    storePlaceCode(r.location_id, features, w);
+    const auto overflow = tiers_->push(r.location_id);
+    w.ages.emplace_back(r.location_id, tiers_->ageOf(r.location_id));
+    enterWorkingMemory(overflow, w);
     counters_.last_location = r.location_id;
     counters_.last_session = *session_id_;
   }
   w.frame.outcome = r.outcome == FrameOutcome::kMerged ? storage::FrameOutcome::kMerged
                                                        : storage::FrameOutcome::kNewLocation;
   w.frame.location_id = r.location_id;
+}
 
-  // Likelihood over working memory, through the inverted index.
-  stage = Clock::now();
-  auto similarities = index_.similarities(
-      signature, [this](LocationId id) { return tiers_->tierOf(id) == Tier::kWm; });
-  times.likelihood = msSince(stage);
-
-  // Bayes filter, the choice among its best location's neighbours, the geometric check.
-  stage = Clock::now();
-  FilterOutcome outcome = filter_->update(tiers_->wm(), similarities, graph_);
-  counters_.previous_score = filter_->state().previous_score;
+std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Features& features,
+                                        const std::vector<LocationSimilarity>& similarities,
+                                        FrameResult& r, FrameWrite& w) {
+  // The reported hypothesis is chosen among the filter's best and its competitors by the
+  // geometric check.
   const Verified verified = verifyHypothesis(outcome, features, similarities, r.frame_id);
   const std::int64_t hypothesis = verified.location;
-  const bool has_hypothesis = hypothesis != kNewPlace;
   std::string reason;
-  if (has_hypothesis) {
+  if (hypothesis != kNewPlace) {
     r.hypothesis.location_id = hypothesis;
     r.hypothesis.posterior = filter_->posteriorOf(hypothesis);
     r.hypothesis.inliers = verified.inliers;
@@ -180,18 +219,7 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
     // EVALUATION.md: the score is 0 where a check other than the final threshold rejected it.
     const bool vetoed = !verified.passed || outcome.reason == RejectReason::kRatioTest;
     r.hypothesis.score = vetoed ? 0.0 : outcome.score;
-    // Only a closure that passed on its own anchors the next ones: chains of temporal
-    // acceptances would drift along the graph while the camera moves on.
-    if (r.hypothesis.accepted && !verified.temporal) {
-      counters_.last_closure_location = hypothesis;
-      counters_.last_closure_frame = r.frame_id;
-      counters_.last_closure_session = r.session_id;
-    }
-    if (r.hypothesis.accepted && hypothesis != r.location_id) {
-      w.links.push_back(
-          link(r.location_id, hypothesis, storage::LinkType::kLoopClosure, r.hypothesis.score));
-      graph_.addLink(r.location_id, hypothesis);
-    }
+    if (r.hypothesis.accepted) acceptLoopClosure(hypothesis, verified.temporal, r, w);
     if (!r.hypothesis.accepted) {
       reason = verified.passed
                    ? std::string(toString(outcome.reason))
@@ -204,23 +232,36 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
   r.hypothesis.rejected_reason = reason;
   w.hypothesis = storage::HypothesisRecord{
       r.frame_id,
-      has_hypothesis ? std::optional<std::int64_t>(hypothesis) : std::nullopt,
+      hypothesis != kNewPlace ? std::optional<std::int64_t>(hypothesis) : std::nullopt,
       r.hypothesis.posterior,
       r.hypothesis.score,
       r.hypothesis.accepted,
       reason};
-  times.filter = msSince(stage);
+  return hypothesis;
+}
 
-  // Memory management: bring back the hypothesis' LTM neighbours, then bound WM.
-  stage = Clock::now();
-  if (has_hypothesis) retrieveNeighbours(hypothesis, w, r);
-  transferToLtm(hypothesis, msSince(start) / 1000.0, w, r);
-  times.memory = msSince(stage);
+void MapImpl::acceptLoopClosure(std::int64_t hypothesis, bool temporal, FrameResult& r,
+                                FrameWrite& w) {
+  // Only a closure that passed on its own anchors the next ones: chains of temporal
+  // acceptances would drift along the graph while the camera moves on.
+  if (!temporal) {
+    counters_.last_closure_location = hypothesis;
+    counters_.last_closure_frame = r.frame_id;
+    counters_.last_closure_session = r.session_id;
+  }
+  if (hypothesis != r.location_id) {
+    w.links.push_back(
+        link(r.location_id, hypothesis, storage::LinkType::kLoopClosure, r.hypothesis.score));
+    graph_.addLink(r.location_id, hypothesis);
+  }
+}
 
-  r.times = times;
-  commit(w, r, source_path);
-  if (has_hypothesis) r.hypothesis.frames = framesOf(hypothesis);
-  return r;
+void MapImpl::manageMemory(std::int64_t hypothesis, double memory_ms, FrameWrite& w,
+                           FrameResult& r) {
+  // Bring back the hypothesis' LTM neighbours, then bound WM.
+  const auto start = Clock::now();
+  if (hypothesis != kNewPlace) retrieveNeighbours(hypothesis, w, r);
+  transferToLtm(hypothesis, (memory_ms + msSince(start)) / 1000.0, w, r);
 }
 
 void MapImpl::enterWorkingMemory(const std::vector<std::int64_t>& ids, FrameWrite& write) {
@@ -236,9 +277,28 @@ void MapImpl::retrieveNeighbours(std::int64_t hypothesis, FrameWrite& write, Fra
     auto more = store_->linkedInTier(n, storage::Tier::kLTM);
     candidates.insert(candidates.end(), more.begin(), more.end());
   }
-  std::vector<std::int64_t> ids = tiers_->retrievalCandidates(hypothesis, candidates);
-  if (ids.empty()) return;
+  bringBack(tiers_->retrievalCandidates(hypothesis, candidates), write, result);
+}
 
+void MapImpl::searchLongTermMemory(const Features& features, FrameWrite& write,
+                                   FrameResult& result) {
+  if (options_.ltm_search <= 0 || tiers_->ltmSize() == 0 || !coder_) return;
+  // The places most like this frame among WM and LTM; those in LTM come back before the
+  // likelihood, so the filter and the check see them in this very frame.
+  const auto code = frameCode(features);
+  const auto matches = places_.search(
+      code, static_cast<std::size_t>(options_.ltm_search),
+      [this](LocationId id) { return tiers_->contains(id) && tiers_->tierOf(id) != Tier::kStm; });
+  std::vector<std::int64_t> ids;
+  for (const PlaceMatch& m : matches)
+    if (tiers_->tierOf(m.location) == Tier::kLtm) ids.push_back(m.location);
+  bringBack(ids, write, result);
+  result.retrieved_by_search = ids.size();
+}
+
+void MapImpl::bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write,
+                        FrameResult& result) {
+  if (ids.empty()) return;
   auto refs = store_->loadWordRefs(ids);
   std::vector<std::int64_t> missing;
   for (std::int64_t id : ids) {
@@ -265,8 +325,27 @@ void MapImpl::retrieveNeighbours(std::int64_t hypothesis, FrameWrite& write, Fra
     }
   }
   tiers_->retrieveToWm(ids);
+  for (std::int64_t id : ids) write.ages.emplace_back(id, tiers_->ageOf(id));
   write.to_wm.insert(write.to_wm.end(), ids.begin(), ids.end());
-  result.retrieved = ids.size();
+  result.retrieved += ids.size();
+}
+
+void MapImpl::storePlaceCode(std::int64_t location_id, const Features& features,
+                             FrameWrite& write) {
+  if (features.descriptors.type() != CV_32F) return;
+  if (!coder_) {
+    // The first location a map stores fixes the coarse centres of every code after it.
+    coder_ = PlaceCoder::train(features.descriptors, PlaceCodeSettings());
+    write.place_coder = coder_->toBytes();
+  }
+  write.place_code = frameCode(features);
+  places_.add(location_id, *write.place_code);
+}
+
+const std::vector<std::int8_t>& MapImpl::frameCode(const Features& features) {
+  // One code per frame, shared by the new location and the LTM search.
+  if (!frame_code_) frame_code_ = coder_->encode(features.descriptors);
+  return *frame_code_;
 }
 
 void MapImpl::transferToLtm(std::int64_t hypothesis, double frame_seconds, FrameWrite& write,
@@ -325,6 +404,7 @@ void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_pa
     if (!w.words.empty()) store_->insertWords(w.words);
     if (w.new_location) {
       store_->insertLocation(*w.new_location);
+      if (w.place_code) store_->putPlaceCode(w.new_location->id, *w.place_code);
       store_->insertWordRefs(w.new_location->id, w.refs);
       if (!w.keypoint_descriptors.empty())
         store_->putState(keypointDescriptorsKey(w.new_location->id), w.keypoint_descriptors);
@@ -334,9 +414,12 @@ void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_pa
     for (const auto& l : w.links) store_->insertLink(l.location_a, l.location_b, l.type, l.score);
     if (!w.to_wm.empty()) store_->setTier(w.to_wm, storage::Tier::kWM);
     if (!w.to_ltm.empty()) store_->setTier(w.to_ltm, storage::Tier::kLTM);
+    if (!w.ages.empty()) store_->setWmAges(w.ages);
+    if (!w.place_coder.empty()) store_->putState(kPlaceCoderKey, w.place_coder);
     if (w.hypothesis) store_->insertHypothesis(*w.hypothesis);
     if (w.frame.outcome != storage::FrameOutcome::kBad)
       store_->putPosterior(filter_->state().posterior);
+    counters_.next_wm_age = tiers_->nextAge();
     counters_.save(*store_);
     vocabulary_state_.save(*store_, *vocabulary_);
     tx.commit();

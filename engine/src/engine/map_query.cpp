@@ -1,21 +1,51 @@
-// Localisation: an image against the stored locations, changing nothing in RAM or in the file.
+// Localisation: an image against the stored locations of every tier, changing nothing in RAM or
+// in the file.
+//
+// Candidates come from two searches: the bag-of-words similarity (eq. 5) over the locations in
+// RAM (STM and WM), and the place codes over every location, LTM included. Each candidate goes
+// through the mapping's geometric check against its own stored keypoints; the verdict is "known"
+// when the best candidate passes it (geometry_min_inliers), "unknown" when none does. A place
+// never seen still finds look-alike candidates, but their matches do not agree on one epipolar
+// geometry, so it is reported unknown instead of as its nearest look-alike.
 #include <algorithm>
 #include <chrono>
+#include <map>
 
 #include "engine/map_impl.h"
+#include "engine/option_mapping.h"
 #include "features/image_conversion.h"
 
 namespace placedb {
+namespace {
+
+// Candidates taken from each search, at least: enough for the check to find the place when the
+// best-looking location is a near neighbour of the right one.
+constexpr std::size_t kCandidatesPerSearch = 5;
+
+}  // namespace
+
+const char* toString(QueryVerdict verdict) {
+  switch (verdict) {
+    case QueryVerdict::kKnown:
+      return "known";
+    case QueryVerdict::kUnknown:
+      return "unknown";
+    case QueryVerdict::kUnverified:
+      return "unverified";
+  }
+  return "unknown";
+}
 
 QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
   const auto start = std::chrono::steady_clock::now();
   QueryResult result;
   Features features = extractor_->extract(toGrey8(image));
   result.feature_count = features.size();
+  const GeometricCheckSettings geometry = toGeometricCheckSettings(options_);
+  result.verdict = geometry.min_inliers > 0 ? QueryVerdict::kUnknown : QueryVerdict::kUnverified;
   if (features.size() == 0 || vocabulary_->size() == 0) return result;
 
   // Nearest words only: in localisation mode the vocabulary is fixed, so nothing is created.
-  // In mapping mode a copy of the options would be needed; the query runs on a fixed view.
   if (!vocabulary_->options().fixed)
     throw Error(ErrorCode::kInternal, "query() needs a map opened in localisation mode");
   vocab::Quantization q = vocabulary_->quantize(features.descriptors, 0);
@@ -24,13 +54,61 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
     if (id >= 0) words.push_back(id);
   Signature signature = Signature::fromWords(std::move(words));
 
-  // Every location held in RAM (STM and WM) is a candidate.
+  const std::size_t wanted = std::max(top_k, kCandidatesPerSearch);
+  std::map<LocationId, QueryMatch> candidates;
   auto sims = index_.similarities(signature);
+  result.searched = sims.size();
   std::stable_sort(sims.begin(), sims.end(),
                    [](const auto& a, const auto& b) { return a.similarity > b.similarity; });
-  if (sims.size() > top_k) sims.resize(top_k);
-  for (const auto& s : sims)
-    result.matches.push_back({s.location, s.similarity, framesOf(s.location)});
+  for (std::size_t i = 0; i < sims.size(); ++i) {
+    if (i < wanted) candidates[sims[i].location].location_id = sims[i].location;
+    auto it = candidates.find(sims[i].location);
+    if (it != candidates.end()) it->second.similarity = sims[i].similarity;
+  }
+  std::vector<std::int8_t> code;
+  if (coder_ && features.descriptors.type() == CV_32F) {
+    code = coder_->encode(features.descriptors);
+    result.searched = std::max(result.searched, places_.size());
+    for (const PlaceMatch& m :
+         places_.search(code, wanted, [this](LocationId id) { return tiers_->contains(id); }))
+      candidates[m.location].location_id = m.location;
+  }
+
+  std::vector<LocationId> ids;
+  for (auto& [id, match] : candidates) {
+    ids.push_back(id);
+    match.tier = tiers_->contains(id) ? tiers_->tierOf(id) : Tier::kLtm;
+    if (!code.empty()) match.code_similarity = places_.similarity(code, id);
+  }
+
+  if (geometry.min_inliers > 0) {
+    GeometricView view;
+    view.descriptors = features.descriptors;
+    for (const auto& k : features.keypoints) view.points.emplace_back(k.x, k.y);
+    const auto refs = store_->loadWordRefs(ids);
+    for (auto& [id, match] : candidates) {
+      auto it = refs.find(id);
+      if (it == refs.end()) continue;
+      match.inliers = checkGeometry(view, viewOf(id, it->second), geometry).inliers;
+      match.verified = match.inliers >= geometry.min_inliers;
+      ++result.checked;
+    }
+  }
+
+  std::vector<QueryMatch> ranked;
+  for (auto& [id, match] : candidates) ranked.push_back(std::move(match));
+  std::sort(ranked.begin(), ranked.end(), [](const QueryMatch& a, const QueryMatch& b) {
+    if (a.verified != b.verified) return a.verified;
+    if (a.verified && a.inliers != b.inliers) return a.inliers > b.inliers;
+    // Place codes compare every tier alike; eq. 5 exists only for locations in RAM.
+    if (a.code_similarity != b.code_similarity) return a.code_similarity > b.code_similarity;
+    if (a.similarity != b.similarity) return a.similarity > b.similarity;
+    return a.location_id < b.location_id;
+  });
+  if (ranked.size() > top_k) ranked.resize(top_k);
+  if (!ranked.empty() && ranked.front().verified) result.verdict = QueryVerdict::kKnown;
+  for (auto& m : ranked) m.frames = framesOf(m.location_id);
+  result.matches = std::move(ranked);
   result.time_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return result;

@@ -43,6 +43,7 @@ MemorySettings toMemorySettings(const Options& o) {
   m.stm_size = o.stm_size;
   m.wm_max = o.wm_max;
   m.time_limit_s = o.t_time_ms / 1000.0;
+  m.time_floor = o.wm_min;
   m.immune_newest_count = o.wm_immune_newest;
   m.immune_newest_ratio = o.wm_recent_ratio;
   m.max_retrieved = o.max_retrieved;

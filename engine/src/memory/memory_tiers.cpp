@@ -51,6 +51,7 @@ void MemorySettings::validate() const {
     problems << " max_transfers_per_frame=" << max_transfers_per_frame << " (>= 0, 0 = no cap);";
   }
   if (max_retrieved < 0) problems << " max_retrieved=" << max_retrieved << " (>= 0);";
+  if (time_floor < 0) problems << " time_floor=" << time_floor << " (>= 0);";
   const std::string text = problems.str();
   if (!text.empty()) throw Error(ErrorCode::kInvalidArgument, "invalid memory settings:" + text);
 }
@@ -155,6 +156,8 @@ std::size_t MemoryTiers::plannedTransfers(double frame_seconds) const {
     if (settings_.max_transfers_per_frame > 0) {
       by_time = std::min(by_time, static_cast<std::size_t>(settings_.max_transfers_per_frame));
     }
+    const auto floor = static_cast<std::size_t>(std::max<std::int64_t>(settings_.time_floor, 0));
+    by_time = wm_size > floor ? std::min(by_time, wm_size - floor) : 0;
   }
   return std::min(std::max(by_size, by_time), wm_size);
 }
@@ -232,6 +235,7 @@ void MemoryTiers::retrieveToWm(const std::vector<MemoryLocationId>& ids) {
   for (MemoryLocationId id : ids) {
     LocationRecord& r = records_.at(id);
     ltm_.erase(id);
+    r.age = next_age_++;  // new to WM: the place the camera just came back to goes last
     enterWm(r);
     retrieved_this_frame_.insert(id);
   }

@@ -4,13 +4,16 @@
 // with the weights and ages that choose what moves between WM and LTM (SPEC sections 5 and 7).
 //
 // Policies fixed here:
-// - Age is the creation order: push() stamps each location with the next sequence number, kept
-//   through every tier. "Oldest first among equal weights" uses it, as does "the newest part of
+// - Age is the order of entering STM/WM: push() stamps each new location with the next sequence
+//   number, and retrieveToWm() stamps a location brought back from LTM again, as RTAB-Map orders
+//   its WM by entry time. "Oldest first among equal weights" uses it, as does "the newest part of
 //   WM": the max(immune_newest_count, floor(immune_newest_ratio x |WM|)) WM locations of largest
-//   age. An old location retrieved from LTM is therefore immune only during its retrieval frame.
+//   age. A retrieved location therefore stays while the camera is around it, instead of being the
+//   first to go again the next frame (it is old by creation and light).
 // - How many to transfer (plannedTransfers): the size trigger asks for |WM| - wm_max; the time
 //   trigger assumes frame time grows with |WM| and asks for ceil(|WM| x (t - T_time) / t), at
-//   least 1, at most max_transfers_per_frame (0 = no cap); the larger request wins. A caller that
+//   least 1, at most max_transfers_per_frame (0 = no cap), never below time_floor locations; the
+//   larger request wins. A caller that
 //   prefers RTAB-Map's word balance (transfer until as many words left the vocabulary as this
 //   frame created) walks transferCandidates() in order, counting with a FreedWordCounter
 //   (filter/inverted_index.h), and stops on its own.
@@ -24,11 +27,12 @@
 #include <utility>
 #include <vector>
 
+#include "placedb/map.h"  // Tier
+
 namespace placedb {
 
 using MemoryLocationId = std::int64_t;
 
-enum class Tier : std::uint8_t { kStm = 0, kWm = 1, kLtm = 2 };
 const char* toString(Tier tier);
 Tier parseTier(const std::string& name);  // "stm", "wm", "ltm"; kInvalidArgument otherwise
 
@@ -39,6 +43,7 @@ struct MemorySettings {
   int immune_newest_count = 0;       // newest WM locations never transferred
   double immune_newest_ratio = 0.2;  // ... or this share of WM (RTAB-Map's Mem/RecentWmRatio)
   int max_transfers_per_frame = 0;   // cap of the time trigger; 0 = none
+  std::int64_t time_floor = 0;       // the time trigger never takes WM below this size
   int max_retrieved = 2;             // RTAB-Map's Rtabmap/MaxRetrieved
 
   void validate() const;  // kInvalidArgument naming each bad field and its valid range
@@ -99,7 +104,7 @@ class MemoryTiers {
   std::vector<MemoryLocationId> retrievalCandidates(
       MemoryLocationId best_hypothesis, const std::vector<MemoryLocationId>& ltm_neighbours,
       std::size_t max_retrieved) const;
-  // Moves these LTM locations to WM and marks them retrieved this frame.
+  // Moves these LTM locations to WM with a new age and marks them retrieved this frame.
   void retrieveToWm(const std::vector<MemoryLocationId>& ids);
 
   // Registers a location already in LTM (a previous session's map) without a frame.
@@ -115,6 +120,7 @@ class MemoryTiers {
   std::size_t wmSize() const { return wm_by_priority_.size(); }
   std::size_t ltmSize() const { return ltm_.size(); }
   const std::set<MemoryLocationId>& retrievedThisFrame() const { return retrieved_this_frame_; }
+  std::int64_t nextAge() const { return next_age_; }
   // Newest part of WM as defined above.
   std::set<MemoryLocationId> newestWm() const;
   std::size_t newestWmCount() const;

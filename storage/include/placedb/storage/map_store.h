@@ -173,6 +173,15 @@ class MapStore {
   void putPosterior(const std::vector<std::pair<std::int64_t, double>>& posterior);
   std::vector<std::pair<std::int64_t, double>> loadPosterior() const;  // by location id
 
+  // Memory tiers (schema 4). Every location's place code, whatever its tier; and its age in the
+  // transfer order (the order of entering STM/WM; a location brought back from LTM enters again).
+  void putPlaceCode(std::int64_t location_id, const std::vector<std::int8_t>& code);
+  std::vector<PlaceCodeRecord> placeCodes() const;  // by location id
+  std::optional<std::vector<std::int8_t>> placeCode(std::int64_t location_id) const;
+  void setWmAges(const std::vector<std::pair<std::int64_t, std::int64_t>>& ages);
+  // Every location's age; its id where none was stored (maps made before schema 4).
+  std::map<std::int64_t, std::int64_t> wmAges() const;
+
   // Vocabulary imports. imported_at is set to now when empty.
   std::int64_t recordVocabularyImport(const VocabularyImportRecord& import);
   std::vector<VocabularyImportRecord> vocabularyImports() const;

@@ -53,6 +53,11 @@ struct LocationRecord {
   std::optional<std::int64_t> created_frame;
 };
 
+struct PlaceCodeRecord {
+  std::int64_t location_id = 0;
+  std::vector<std::int8_t> code;
+};
+
 struct LocationWeight {
   std::int64_t id = 0;
   std::int64_t weight = 0;

@@ -1,0 +1,195 @@
+#include "memory/place_code.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "placedb/error.h"
+
+namespace placedb {
+namespace {
+
+constexpr int kLloydIterations = 10;
+constexpr std::uint64_t kProjectionSeed = 0x5eedc0dedb1ace01ULL;
+
+// splitmix64: the projection must be the same bits on every run and every standard library,
+// which <random>'s distributions do not promise.
+std::uint64_t nextRandom(std::uint64_t& state) {
+  std::uint64_t z = (state += 0x9e3779b97f4a7c15ULL);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+float squaredDistance(const float* a, const float* b, int dim) {
+  float d = 0;
+  for (int i = 0; i < dim; ++i) {
+    const float t = a[i] - b[i];
+    d += t * t;
+  }
+  return d;
+}
+
+int nearestCentre(const cv::Mat& centres, const float* row) {
+  int best = 0;
+  float best_distance = std::numeric_limits<float>::max();
+  for (int c = 0; c < centres.rows; ++c) {
+    const float d = squaredDistance(centres.ptr<float>(c), row, centres.cols);
+    if (d < best_distance) {
+      best_distance = d;
+      best = c;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+PlaceCoder::PlaceCoder(cv::Mat centres, int code_dim)
+    : dim_(centres.cols), code_dim_(code_dim), centres_(std::move(centres)) {
+  makeProjection();
+}
+
+void PlaceCoder::makeProjection() {
+  const std::size_t in = static_cast<std::size_t>(centres_.rows) * static_cast<std::size_t>(dim_);
+  signs_.resize(static_cast<std::size_t>(code_dim_) * in);
+  std::uint64_t state = kProjectionSeed;
+  for (std::size_t i = 0; i < signs_.size(); i += 64) {
+    const std::uint64_t bits = nextRandom(state);
+    for (std::size_t b = 0; b < 64 && i + b < signs_.size(); ++b)
+      signs_[i + b] = (bits >> b) & 1 ? 1 : -1;
+  }
+}
+
+PlaceCoder PlaceCoder::train(const cv::Mat& descriptors, const PlaceCodeSettings& settings) {
+  if (descriptors.empty() || descriptors.type() != CV_32F || settings.centres < 1 ||
+      settings.code_dim < 1)
+    throw Error(ErrorCode::kInvalidArgument,
+                "place codes need float descriptors, at least one centre and one code value");
+  const int k = settings.centres;
+  const int dim = descriptors.cols;
+  const int n = descriptors.rows;
+  cv::Mat centres(k, dim, CV_32F);
+
+  // Farthest-point seeding from the strongest keypoint (row 0): no random draw to reproduce.
+  std::vector<float> nearest(static_cast<std::size_t>(n), std::numeric_limits<float>::max());
+  int chosen = 0;
+  for (int c = 0; c < k; ++c) {
+    descriptors.row(chosen % n).copyTo(centres.row(c));
+    int farthest = 0;
+    float far_distance = -1;
+    for (int i = 0; i < n; ++i) {
+      const float d = squaredDistance(descriptors.ptr<float>(i), centres.ptr<float>(c), dim);
+      nearest[i] = std::min(nearest[i], d);
+      if (nearest[i] > far_distance) {
+        far_distance = nearest[i];
+        farthest = i;
+      }
+    }
+    chosen = far_distance > 0 ? farthest : c + 1;  // all rows covered: repeat rows in order
+  }
+
+  std::vector<int> assignment(static_cast<std::size_t>(n), -1);
+  for (int iteration = 0; iteration < kLloydIterations; ++iteration) {
+    bool changed = false;
+    for (int i = 0; i < n; ++i) {
+      const int c = nearestCentre(centres, descriptors.ptr<float>(i));
+      changed = changed || c != assignment[i];
+      assignment[i] = c;
+    }
+    if (!changed) break;
+    cv::Mat sums = cv::Mat::zeros(k, dim, CV_64F);
+    std::vector<int> counts(static_cast<std::size_t>(k), 0);
+    for (int i = 0; i < n; ++i) {
+      const float* row = descriptors.ptr<float>(i);
+      double* sum = sums.ptr<double>(assignment[i]);
+      for (int j = 0; j < dim; ++j) sum[j] += row[j];
+      counts[assignment[i]] += 1;
+    }
+    for (int c = 0; c < k; ++c) {
+      if (counts[c] == 0) continue;  // an empty cluster keeps its centre
+      for (int j = 0; j < dim; ++j)
+        centres.at<float>(c, j) = static_cast<float>(sums.at<double>(c, j) / counts[c]);
+    }
+  }
+  return PlaceCoder(centres, settings.code_dim);
+}
+
+std::vector<std::uint8_t> PlaceCoder::toBytes() const {
+  // Layout: int32 K, int32 dim, int32 code_dim, then K x dim floats, little-endian as in RAM.
+  const std::int32_t header[3] = {centres_.rows, dim_, code_dim_};
+  std::vector<std::uint8_t> out(sizeof(header) + centres_.total() * sizeof(float));
+  std::memcpy(out.data(), header, sizeof(header));
+  std::memcpy(out.data() + sizeof(header), centres_.ptr<float>(), centres_.total() * sizeof(float));
+  return out;
+}
+
+PlaceCoder PlaceCoder::fromBytes(const std::vector<std::uint8_t>& bytes, int dim) {
+  std::int32_t header[3] = {0, 0, 0};
+  if (bytes.size() >= sizeof(header)) std::memcpy(header, bytes.data(), sizeof(header));
+  const auto [k, stored_dim, code_dim] = header;
+  if (k < 1 || k > 4096 || stored_dim != dim || code_dim < 1 || code_dim > 65536 ||
+      bytes.size() != sizeof(header) + std::size_t(k) * std::size_t(dim) * sizeof(float))
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("place-code centres do not fit {}-value descriptors", dim));
+  cv::Mat centres(k, dim, CV_32F);
+  std::memcpy(centres.ptr<float>(), bytes.data() + sizeof(header), centres.total() * sizeof(float));
+  for (std::size_t i = 0; i < centres.total(); ++i)
+    if (!std::isfinite(centres.ptr<float>()[i]))
+      throw Error(ErrorCode::kInvalidArgument, "place-code centres hold a non-finite value");
+  return PlaceCoder(centres, code_dim);
+}
+
+std::vector<std::int8_t> PlaceCoder::encode(const cv::Mat& descriptors) const {
+  const int k = centres_.rows;
+  std::vector<float> vlad(static_cast<std::size_t>(k) * static_cast<std::size_t>(dim_), 0.0f);
+  for (int i = 0; i < descriptors.rows; ++i) {
+    const float* row = descriptors.ptr<float>(i);
+    const int c = nearestCentre(centres_, row);
+    const float* centre = centres_.ptr<float>(c);
+    float* block = vlad.data() + static_cast<std::size_t>(c) * dim_;
+    for (int j = 0; j < dim_; ++j) block[j] += row[j] - centre[j];
+  }
+  for (int c = 0; c < k; ++c) {
+    float* block = vlad.data() + static_cast<std::size_t>(c) * dim_;
+    float norm = 0;
+    for (int j = 0; j < dim_; ++j) norm += block[j] * block[j];
+    if (norm <= 0) continue;
+    const float inv = 1.0f / std::sqrt(norm);
+    for (int j = 0; j < dim_; ++j) {
+      const float v = block[j] * inv;
+      block[j] = v < 0 ? -std::sqrt(-v) : std::sqrt(v);
+    }
+  }
+  std::vector<float> projected(static_cast<std::size_t>(code_dim_), 0.0f);
+  float largest = 0;
+  for (int o = 0; o < code_dim_; ++o) {
+    const std::int8_t* sign = signs_.data() + static_cast<std::size_t>(o) * vlad.size();
+    float sum = 0;
+    for (std::size_t i = 0; i < vlad.size(); ++i) sum += sign[i] * vlad[i];
+    projected[o] = sum;
+    largest = std::max(largest, std::fabs(sum));
+  }
+  std::vector<std::int8_t> code(static_cast<std::size_t>(code_dim_), 0);
+  if (largest <= 0) return code;
+  // Cosine similarity is scale-free, so each code uses its own full byte range.
+  for (int o = 0; o < code_dim_; ++o)
+    code[o] = static_cast<std::int8_t>(std::lround(projected[o] / largest * 127.0f));
+  return code;
+}
+
+double codeSimilarity(const std::int8_t* a, const std::int8_t* b, int code_dim) {
+  std::int64_t dot = 0, na = 0, nb = 0;
+  for (int i = 0; i < code_dim; ++i) {
+    dot += std::int32_t(a[i]) * b[i];
+    na += std::int32_t(a[i]) * a[i];
+    nb += std::int32_t(b[i]) * b[i];
+  }
+  if (na == 0 || nb == 0) return 0.0;
+  return double(dot) / std::sqrt(double(na) * double(nb));
+}
+
+}  // namespace placedb

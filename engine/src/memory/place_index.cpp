@@ -1,0 +1,79 @@
+#include "memory/place_index.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "placedb/error.h"
+
+namespace placedb {
+namespace {
+
+double norm(const std::int8_t* code, std::size_t dim) {
+  std::int64_t sum = 0;
+  for (std::size_t i = 0; i < dim; ++i) sum += std::int32_t(code[i]) * code[i];
+  return std::sqrt(double(sum));
+}
+
+bool better(const PlaceMatch& a, const PlaceMatch& b) {
+  return a.similarity != b.similarity ? a.similarity > b.similarity : a.location < b.location;
+}
+
+}  // namespace
+
+void PlaceIndex::add(std::int64_t location, const std::vector<std::int8_t>& code) {
+  if (ids_.empty()) dim_ = code.size();
+  if (code.size() != dim_ || dim_ == 0)
+    throw Error(ErrorCode::kInvalidArgument, "place code of location " + std::to_string(location) +
+                                                 " has " + std::to_string(code.size()) +
+                                                 " values, the index " + std::to_string(dim_));
+  auto [it, added] = row_.emplace(location, ids_.size());
+  if (added) {
+    ids_.push_back(location);
+    codes_.insert(codes_.end(), code.begin(), code.end());
+    norms_.push_back(norm(code.data(), dim_));
+  } else {
+    std::copy(code.begin(), code.end(), codes_.begin() + std::ptrdiff_t(it->second * dim_));
+    norms_[it->second] = norm(code.data(), dim_);
+  }
+}
+
+void PlaceIndex::clear() {
+  dim_ = 0;
+  ids_.clear();
+  codes_.clear();
+  norms_.clear();
+  row_.clear();
+}
+
+double PlaceIndex::similarity(const std::vector<std::int8_t>& code, std::int64_t location) const {
+  auto it = row_.find(location);
+  if (it == row_.end() || code.size() != dim_) return 0.0;
+  const double n = norm(code.data(), dim_);
+  if (n == 0 || norms_[it->second] == 0) return 0.0;
+  const std::int8_t* stored = codes_.data() + it->second * dim_;
+  std::int32_t dot = 0;
+  for (std::size_t i = 0; i < dim_; ++i) dot += std::int32_t(stored[i]) * code[i];
+  return double(dot) / (norms_[it->second] * n);
+}
+
+std::vector<PlaceMatch> PlaceIndex::search(const std::vector<std::int8_t>& code, std::size_t k,
+                                           const std::function<bool(std::int64_t)>& admit) const {
+  std::vector<PlaceMatch> best;
+  if (k == 0 || ids_.empty() || code.size() != dim_) return best;
+  const double query_norm = norm(code.data(), dim_);
+  if (query_norm == 0) return best;
+  best.reserve(k + 1);
+  for (std::size_t row = 0; row < ids_.size(); ++row) {
+    if (norms_[row] == 0 || !admit(ids_[row])) continue;
+    const std::int8_t* stored = codes_.data() + row * dim_;
+    std::int32_t dot = 0;
+    for (std::size_t i = 0; i < dim_; ++i) dot += std::int32_t(stored[i]) * code[i];
+    const PlaceMatch m{ids_[row], double(dot) / (norms_[row] * query_norm)};
+    if (best.size() == k && !better(m, best.back())) continue;
+    best.insert(std::upper_bound(best.begin(), best.end(), m, better), m);
+    if (best.size() > k) best.pop_back();
+  }
+  return best;
+}
+
+}  // namespace placedb
