@@ -3,7 +3,8 @@
 //
 // Candidates come from two searches: the bag-of-words similarity (eq. 5) over the locations in
 // RAM (STM and WM), and the place codes over every location, LTM included. Each candidate goes
-// through the mapping's geometric check against its own stored keypoints; the verdict is "known"
+// through the mapping's geometric check against its own stored keypoints, and so do the
+// locations within two links of the best one that passes; the verdict is "known"
 // when the best candidate passes it (geometry_min_inliers), "unknown" when none does. A place
 // never seen still finds look-alike candidates, but their matches do not agree on one epipolar
 // geometry, so it is reported unknown instead of as its nearest look-alike.
@@ -21,6 +22,8 @@ namespace {
 // Candidates taken from each search, at least: enough for the check to find the place when the
 // best-looking location is a near neighbour of the right one.
 constexpr std::size_t kCandidatesPerSearch = 5;
+// Links around the best verified candidate whose locations are checked too.
+constexpr int kNeighbourDepth = 2;
 
 }  // namespace
 
@@ -85,13 +88,47 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
     GeometricView view;
     view.descriptors = features.descriptors;
     for (const auto& k : features.keypoints) view.points.emplace_back(k.x, k.y);
-    const auto refs = store_->loadWordRefs(ids);
-    for (auto& [id, match] : candidates) {
-      auto it = refs.find(id);
-      if (it == refs.end()) continue;
-      match.inliers = checkGeometry(view, viewOf(id, it->second), geometry).inliers;
-      match.verified = match.inliers >= geometry.min_inliers;
-      ++result.checked;
+    auto check = [&](const std::vector<LocationId>& which) {
+      const auto refs = store_->loadWordRefs(which);
+      for (LocationId id : which) {
+        auto it = refs.find(id);
+        if (it == refs.end()) continue;
+        QueryMatch& match = candidates[id];
+        match.inliers = checkGeometry(view, viewOf(id, it->second), geometry).inliers;
+        match.verified = match.inliers >= geometry.min_inliers;
+        ++result.checked;
+      }
+    };
+    check(ids);
+    // The searches rank whole images; the best verified place's graph neighbours (any tier)
+    // often see the query's viewpoint better still, as the filter's neighbours do in mapping.
+    const QueryMatch* best = nullptr;
+    for (const auto& [id, match] : candidates)
+      if (match.verified && (!best || match.inliers > best->inliers)) best = &match;
+    if (best) {
+      std::vector<LocationId> around;
+      std::vector<LocationId> frontier{best->location_id};
+      for (int depth = 0; depth < kNeighbourDepth; ++depth) {
+        std::vector<LocationId> next;
+        for (LocationId id : frontier)
+          for (const auto& l : store_->links(id)) {
+            const LocationId other = l.location_a == id ? l.location_b : l.location_a;
+            if (candidates.count(other) || std::count(around.begin(), around.end(), other))
+              continue;
+            around.push_back(other);
+            next.push_back(other);
+          }
+        frontier = std::move(next);
+      }
+      for (LocationId id : around) {
+        QueryMatch& match = candidates[id];
+        match.location_id = id;
+        match.tier = tiers_->contains(id) ? tiers_->tierOf(id) : Tier::kLtm;
+        if (!code.empty()) match.code_similarity = places_.similarity(code, id);
+        for (const auto& s : sims)
+          if (s.location == id) match.similarity = s.similarity;
+      }
+      check(around);
     }
   }
 
