@@ -7,7 +7,7 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config
   libsqlite3-dev sqlite3
-  libopencv-dev libflann-dev liblz4-dev libeigen3-dev
+  libopencv-dev
   libboost-serialization-dev
   libgtest-dev libgmock-dev
   nlohmann-json3-dev libcli11-dev libfmt-dev

@@ -70,5 +70,12 @@ TEST(SettingsInput, RefusesUnknownKeysBadValuesAndMalformedInput) {
   EXPECT_EQ(code(missing_config), ErrorCode::kIo);
 }
 
+// The word index is placedb's own kd-forest; the help must not name a library it does not link.
+TEST(SettingsInput, HelpNamesNoLibraryPlacedbDoesNotUse) {
+  const std::string help = settingsHelp();
+  EXPECT_EQ(help.find("FLANN"), std::string::npos) << help;
+  EXPECT_NE(help.find("kd_trees"), std::string::npos) << help;
+}
+
 }  // namespace
 }  // namespace placedb::cli
