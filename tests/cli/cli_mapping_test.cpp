@@ -228,9 +228,13 @@ TEST(CliSyntheticSequence, VocabularyExport) {
   auto binary = placedb({"vocab", "export", map, (dir / "words.pvoc").string()}, dir);
   ASSERT_EQ(binary.exit_code, 0) << describe(binary);
   EXPECT_GT(fs::file_size(dir / "words.pvoc"), static_cast<std::uintmax_t>(words) * 64 * 4);
-  auto text = placedb({"vocab", "export", map, (dir / "words.txt").string(), "--text"}, dir);
+  auto text =
+      placedb({"vocab", "export", map, (dir / "words.txt").string(), "--format", "rtabmap"}, dir);
   ASSERT_EQ(text.exit_code, 0) << describe(text);
   std::ifstream in(dir / "words.txt");
+  std::string header;
+  std::getline(in, header);
+  EXPECT_EQ(header, "WordID Descriptors...64");  // RTAB-Map reads the dimension from it
   std::int64_t lines = 0;
   for (std::string line; std::getline(in, line);) lines += line.empty() ? 0 : 1;
   EXPECT_EQ(lines, words);
@@ -250,7 +254,7 @@ TEST(CliSyntheticSequence, VocabularyExport) {
   EXPECT_EQ(fileOf(dir / "again.pvoc"), fileOf(dir / "words.pvoc"));
   const auto from_text = (dir / "from_text.placedb").string();
   ASSERT_EQ(placedb({"vocab", "import", (dir / "words.txt").string(), from_text, "--mode", "seed",
-                     "--text"},
+                     "--format", "rtabmap"},
                     dir)
                 .exit_code,
             0);
