@@ -1,4 +1,5 @@
-# cmake -DBUILD_DIR=... -DCONSUMER_DIR=... -DWORK_DIR=... -DDATASETS_DIR=... -DCXX=... -P this
+# cmake -DBUILD_DIR=... -DCONSUMER_DIR=... -DWORK_DIR=... -DDATASETS_DIR=... -DCXX=...
+#       [-DPYTHON=... -DPYTHON_DIR=...] -P this
 # Fails (message FATAL_ERROR) naming the step that went wrong.
 
 function(run step)
@@ -59,3 +60,12 @@ run("compile consumer with pkg-config" ${CXX} -std=c++17 -O1 ${CONSUMER_DIR}/con
     ${flags} -o ${WORK_DIR}/consumer_pc)
 run("consumer (pkg-config)" ${WORK_DIR}/consumer_pc ${WORK_DIR}/pc.placedb ${images})
 expect_three_frames("pkg-config")
+
+if(PYTHON AND PYTHON_DIR)
+  run("import the installed Python module" ${CMAKE_COMMAND} -E env
+      PYTHONPATH=${prefix}/${PYTHON_DIR} ${PYTHON} -c "import placedb\nprint(placedb.__file__)")
+  string(FIND "${LAST_OUTPUT}" "${prefix}/" at)
+  if(NOT at EQUAL 0)
+    message(FATAL_ERROR "the Python module was not imported from the prefix: ${LAST_OUTPUT}")
+  endif()
+endif()

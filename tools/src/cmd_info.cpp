@@ -8,6 +8,7 @@
 #include <tuple>
 
 #include "commands.h"
+#include "map_summary.h"
 #include "placedb/error.h"
 #include "placedb/options.h"
 #include "placedb/storage/map_store.h"
@@ -39,8 +40,9 @@ const char* linkName(storage::LinkType type) {
   return "?";
 }
 
-// Everything `info` reports, gathered read-only.
-nlohmann::json inspect(const std::string& path) {
+}  // namespace
+
+nlohmann::json inspectMap(const std::string& path) {
   if (!std::filesystem::exists(path))
     throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", path));
   storage::MapStore store(path, storage::OpenMode::kReadOnly);
@@ -109,6 +111,8 @@ nlohmann::json inspect(const std::string& path) {
   return info;
 }
 
+namespace {
+
 std::string describe(const nlohmann::json& info) {
   std::string text = fmt::format(
       "map {}: {:.1f} MiB, schema version {}\n"
@@ -169,7 +173,7 @@ Command addInfoCommand(CLI::App& parent) {
   app->add_option("MAP", *path, "map file")->required();
   app->add_flag("--json", *json, "print one JSON object (all settings included)");
   return {app, [path, json]() {
-            nlohmann::json info = inspect(*path);
+            nlohmann::json info = inspectMap(*path);
             std::fputs((*json ? info.dump(2) + "\n" : describe(info)).c_str(), stdout);
             return 0;
           }};

@@ -8,19 +8,11 @@
 #include "placedb/error.h"
 #include "placedb/map.h"
 #include "placedb/storage/map_store.h"
+#include "vocab_transfer.h"
 #include "vocabulary/vocabulary_file.h"
 
 namespace placedb::cli {
-namespace {
 
-struct VocabRequest {
-  std::string map_path, file, mode = "fixed", extractor;
-  std::string format = "placedb";  // placedb | rtabmap (--text)
-  bool text = false;
-};
-
-// Every word stored in the map (all memory tiers), ascending ids, with the last session's
-// settings: the extractor and distance unit the words were made with.
 vocab::VocabularyData wordsOfMap(const std::string& map_path) {
   if (!std::filesystem::exists(map_path))
     throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", map_path));
@@ -126,8 +118,6 @@ int runImport(const VocabRequest& request) {
              stderr);
   return 0;
 }
-
-}  // namespace
 
 Command addVocabCommand(CLI::App& parent) {
   auto request = std::make_shared<VocabRequest>();
