@@ -143,9 +143,25 @@ TEST(CliRealSequence, MapEvalInfoQueryOnRtabmapSamples) {
   EXPECT_EQ(about["frames"], 84);
   EXPECT_GT(about["words"].get<std::int64_t>(), 0);
   EXPECT_GT(about["locations"].get<std::int64_t>(), 0);
+  // The samples revisit their start: accepted closures are stored as links.
+  EXPECT_GT(about["loop_closures"].get<std::int64_t>(), 0);
+  std::int64_t bad_in_log = 0;
+  {
+    std::ifstream rows(log);
+    for (std::string row; std::getline(rows, row);)
+      bad_in_log += row.find(",bad,") != std::string::npos;
+  }
+  EXPECT_EQ(about["bad_frames"].get<std::int64_t>(), bad_in_log);
+  EXPECT_GT(about["index_words"].get<std::int64_t>(), 0);
+  EXPECT_LE(about["index_words"].get<std::int64_t>(), about["words"].get<std::int64_t>());
   auto text = placedb({"info", map.string()}, dir);
   EXPECT_EQ(text.exit_code, 0);
   EXPECT_NE(text.out.find("session 1: 84 frames"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("frames 84 (" + std::to_string(bad_in_log) + " bad), loop closures " +
+                          about["loop_closures"].dump()),
+            std::string::npos)
+      << text.out;
+  EXPECT_NE(text.out.find("in the kd-index after the last frame"), std::string::npos) << text.out;
 
   // A mapped image finds its own place; the map file is not changed by a query.
   auto before = fs::last_write_time(map);

@@ -30,9 +30,16 @@ int run(int argc, char** argv) {
   app.footer(placedb::cli::exitCodeTable());
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string(PLACEDB_VERSION_STRING));
+  // The help to point at is that of the deepest subcommand named on the command line, also when
+  // the error (a missing argument) is reported by the top-level app.
   app.failure_message([](const CLI::App* failed, const CLI::Error& e) {
-    return fmt::format("placedb: error: {}\nRun `{} --help` for usage.\n", e.what(),
-                       failed->get_parent() ? "placedb " + failed->get_name() : "placedb");
+    std::string command = "placedb";
+    for (const CLI::App* a = failed; a;) {
+      if (a->get_parent()) command += " " + a->get_name();
+      const auto chosen = a->get_subcommands();
+      a = chosen.empty() ? nullptr : chosen.front();
+    }
+    return fmt::format("placedb: error: {}\nRun `{} --help` for usage.\n", e.what(), command);
   });
 
   std::vector<Command> commands = {

@@ -8,6 +8,7 @@
 #include <functional>
 #include <limits>
 
+#include "api/setting_aliases.h"
 #include "placedb/error.h"
 
 namespace placedb {
@@ -185,7 +186,7 @@ std::string knownKeys() {
 Options Options::fromSettings(const std::map<std::string, std::string>& settings,
                               const Options& base) {
   Options o = base;
-  for (const auto& [key, value] : settings) {
+  for (const auto& [key, value] : withAliasesResolved(settings)) {
     const Row* row = find(key);
     if (!row)
       throw Error(ErrorCode::kInvalidArgument,
