@@ -8,6 +8,7 @@
 
 #include "engine_fixture.h"
 #include "legacy_split_log.h"
+#include "placedb/storage/migrations.h"
 #include "vocabulary/vocabulary.h"
 
 namespace placedb::testing {
@@ -199,7 +200,7 @@ TEST_P(ResumeTest, SchemaTwoMapConvertsAndResumes) {
   };
   // Converted at the stop after 30 frames, stopped again after 60.
   auto once = run("converted_once_" + std::to_string(GetParam()), options, 30, true, converter(1));
-  EXPECT_EQ(sqlCount(map_path, "PRAGMA user_version"), 3);
+  EXPECT_EQ(sqlCount(map_path, "PRAGMA user_version"), storage::currentSchemaVersion());
   EXPECT_EQ(
       sqlCount(map_path, "SELECT count(*) FROM engine_state WHERE key LIKE 'vocabulary.splits%'"),
       0);

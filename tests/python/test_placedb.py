@@ -61,6 +61,7 @@ def test_revisited_views_close_loops_that_loop_closures_lists(tmp_path):
     rows = placedb.loop_closures(path)
     assert len(rows) >= len(accepted)
     assert {"location_a", "location_b", "score", "first_frame_a", "first_frame_b"} <= set(rows[0])
+    assert all(row["session_a"] == row["session_b"] == 1 for row in rows)
 
     with placedb.Map(path, read_only=True) as m:
         found = m.query(scene(3), top=3)
