@@ -19,7 +19,9 @@ add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_info.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_vocab.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_eval.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_demo.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_demo.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/graph_export.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_export.cpp)
 target_include_directories(placedb_cli PUBLIC ${CMAKE_CURRENT_LIST_DIR}/src)
 # The demo and vocab commands use engine internals (synthetic sequences, the vocabulary file).
 target_link_libraries(placedb_cli

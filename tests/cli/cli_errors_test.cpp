@@ -33,7 +33,7 @@ TEST(CliUsage, HelpTeachesEverySubcommand) {
   EXPECT_EQ(top.exit_code, 0);
   EXPECT_NE(top.out.find("Exit status"), std::string::npos) << top.out;
   EXPECT_NE(top.out.find("map busy"), std::string::npos);
-  for (const char* sub : {"map", "query", "info", "vocab", "eval", "demo"}) {
+  for (const char* sub : {"map", "query", "info", "vocab", "eval", "demo", "export", "settings"}) {
     auto help = placedb({sub, "--help"}, dir);
     EXPECT_EQ(help.exit_code, 0) << sub;
     EXPECT_NE(help.out.find("Example"), std::string::npos) << sub << ":\n" << help.out;

@@ -163,6 +163,32 @@ TEST(CliRealSequence, MapEvalInfoQueryOnRtabmapSamples) {
       << text.out;
   EXPECT_NE(text.out.find("in the kd-index after the last frame"), std::string::npos) << text.out;
 
+  // The graph for other tools: every location and every loop closure, in each format.
+  auto occurrences = [](const fs::path& file, const std::string& needle) {
+    std::ifstream in(file);
+    std::int64_t n = 0;
+    for (std::string line; std::getline(in, line);) n += line.find(needle) != std::string::npos;
+    return n;
+  };
+  const std::int64_t locations = about["locations"], closures = about["loop_closures"];
+  for (const char* format : {"graphml", "g2o", "csv"}) {
+    auto exported = placedb({"export", map.string(),
+                             (dir / (std::string("graph.") + format)).string(), "--format", format},
+                            dir);
+    ASSERT_EQ(exported.exit_code, 0) << describe(exported);
+  }
+  EXPECT_EQ(occurrences(dir / "graph.graphml", "<node id="), locations);
+  EXPECT_EQ(occurrences(dir / "graph.graphml", ">loop_closure<"), closures);
+  EXPECT_EQ(occurrences(dir / "graph.graphml", "<data key=\"appearance_only\">true"), closures);
+  EXPECT_EQ(occurrences(dir / "graph.g2o", "VERTEX_SE3:QUAT"), locations);
+  EXPECT_EQ(occurrences(dir / "graph.g2o", "# placedb appearance-only"), closures);
+  EXPECT_GT(occurrences(dir / "graph.g2o", "EDGE_SE3:QUAT"), closures);  // and odometry
+  EXPECT_EQ(occurrences(dir / "graph.csv" / "locations.csv", ","), locations + 1);
+  EXPECT_EQ(occurrences(dir / "graph.csv" / "links.csv", ",loop_closure,"), closures);
+  expectCleanError(placedb({"export", map.string(), "x", "--format", "dot"}, dir), 2);
+  expectCleanError(
+      placedb({"export", (dir / "absent.placedb").string(), "x", "--format", "csv"}, dir), 3);
+
   // A mapped image finds its own place; the map file is not changed by a query.
   auto before = fs::last_write_time(map);
   auto size_before = fs::file_size(map);

@@ -24,6 +24,7 @@ int run(int argc, char** argv) {
       "  placedb eval run.csv gt_pairs.txt --plots plots/   score the run, draw its figures\n"
       "  placedb query run.placedb photo.jpg                where was this photo taken?\n"
       "  placedb info run.placedb                           what the map holds\n"
+      "  placedb export run.placedb g.g2o --format g2o      graph for a pose-graph optimiser\n"
       "  placedb demo --out demo-output                     all of it on a synthetic tour\n",
       PLACEDB_VERSION_STRING)};
   app.name("placedb");
@@ -43,10 +44,10 @@ int run(int argc, char** argv) {
   });
 
   std::vector<Command> commands = {
-      placedb::cli::addMapCommand(app),     placedb::cli::addQueryCommand(app),
-      placedb::cli::addInfoCommand(app),    placedb::cli::addVocabCommand(app),
-      placedb::cli::addEvalCommand(app),    placedb::cli::addDemoCommand(app),
-      placedb::cli::addSettingsCommand(app)};
+      placedb::cli::addMapCommand(app),      placedb::cli::addQueryCommand(app),
+      placedb::cli::addInfoCommand(app),     placedb::cli::addVocabCommand(app),
+      placedb::cli::addEvalCommand(app),     placedb::cli::addDemoCommand(app),
+      placedb::cli::addSettingsCommand(app), placedb::cli::addExportCommand(app)};
 
   try {
     app.parse(argc, argv);
