@@ -12,6 +12,7 @@ add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/progress.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/eval.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/plots.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/loop_matrix.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/run_series.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/mapping_run.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_map.cpp

@@ -131,7 +131,7 @@ TEST(CliRealSequence, MapEvalInfoQueryOnRtabmapSamples) {
                          dir);
   ASSERT_EQ(plotted.exit_code, 0) << describe(plotted);
   for (const char* png : {"precision_recall.png", "score.png", "vocabulary.png",
-                          "quantisation_error.png", "wm_size.png", "time.png"}) {
+                          "quantisation_error.png", "wm_size.png", "time.png", "loop_matrix.png"}) {
     cv::Mat image = cv::imread((dir / "plots" / png).string());
     EXPECT_FALSE(image.empty()) << png;
   }
