@@ -9,6 +9,7 @@
 #include "eval.h"
 #include "frame_log.h"
 #include "loop_matrix.h"
+#include "run_series.h"
 #include "subprocess.h"
 #include "test_paths.h"
 
@@ -148,6 +149,28 @@ TEST(PrecisionRecall, CurveOverThresholds) {
   EXPECT_DOUBLE_EQ(eval.pr_curve[2].precision, 0.5);
   EXPECT_DOUBLE_EQ(eval.pr_curve[2].recall, 2.0 / 3);
   EXPECT_DOUBLE_EQ(eval.figures.wrong_bar, 0.8);
+}
+
+// A bad frame's figures are gaps (NaN) in the plotted series, not zeros; its time stays.
+TEST(RunSeries, BadFramesAreGapsNotZeros) {
+  CsvTable log;
+  log.header = {"frame",           "candidate_frames", "score",
+                "accepted",        "time_ms",          "outcome",
+                "vocabulary_size", "wm_size",          "mean_quantisation_error"};
+  log.rows = {{"0", "", "0", "0", "10", "new", "100", "0", "0.1"},
+              {"1", "", "0", "0", "4", "bad", "0", "0", "0"},
+              {"2", "", "0.5", "0", "12", "new", "180", "1", "0.2"}};
+  const Evaluation eval = evaluate(log, {}, 0);
+  const RunSeries series = buildRunSeries(log, eval, {});
+  ASSERT_EQ(series.frame.size(), 3u);
+  for (const auto* values :
+       {&series.score, &series.vocabulary_size, &series.wm_size, &series.mean_quantisation_error}) {
+    ASSERT_EQ(values->size(), 3u);
+    EXPECT_TRUE(std::isnan((*values)[1]));
+    EXPECT_FALSE(std::isnan((*values)[2]));
+  }
+  EXPECT_DOUBLE_EQ(series.vocabulary_size[2], 180);
+  EXPECT_DOUBLE_EQ(series.time_ms[1], 4);
 }
 
 // Frame 8 revisits 1 (found), 9 revisits 2 (missed; 9 took 5 instead): white, green, red pixels.
