@@ -1,4 +1,4 @@
--- placedb map schema: the current version (4), as one file.
+-- placedb map schema: the current version (5), as one file.
 -- It must equal the result of applying migrations/0001..N in order; a test compares
 -- sqlite_master of both. `sqlite3 new.db < schema/schema.sql` makes an empty placedb map.
 -- See schema/SCHEMA.md for the meaning of every table, column and view.
@@ -192,7 +192,9 @@ SELECT k.location_a, k.location_b, k.score,
        (SELECT min(fa.source_index) FROM location_frames lfa JOIN frames fa ON fa.id = lfa.frame_id
          WHERE lfa.location_id = k.location_a) AS first_frame_a,
        (SELECT min(fb.source_index) FROM location_frames lfb JOIN frames fb ON fb.id = lfb.frame_id
-         WHERE lfb.location_id = k.location_b) AS first_frame_b
+         WHERE lfb.location_id = k.location_b) AS first_frame_b,
+       (SELECT la.session_id FROM locations la WHERE la.id = k.location_a) AS session_a,
+       (SELECT lb.session_id FROM locations lb WHERE lb.id = k.location_b) AS session_b
 FROM links k WHERE k.type = 1;
 
 CREATE VIEW v_hypotheses AS
@@ -224,5 +226,5 @@ CREATE TABLE wm_entries (
 
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 4;
+PRAGMA user_version = 5;
 COMMIT;

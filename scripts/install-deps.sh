@@ -7,12 +7,12 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config
   libsqlite3-dev sqlite3
-  libopencv-dev libflann-dev liblz4-dev libeigen3-dev
+  libopencv-dev
   libboost-serialization-dev
   libgtest-dev libgmock-dev
   nlohmann-json3-dev libcli11-dev libfmt-dev
   libplplot-dev plplot-driver-cairo
-  python3
+  python3 python3-dev pybind11-dev python3-numpy python3-pytest
 )
 if [[ "${1:-}" == "--fuzz" ]]; then
   packages+=(clang-14 libclang-rt-14-dev)

@@ -12,6 +12,7 @@ add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/progress.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/eval.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/plots.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/loop_matrix.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/run_series.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/mapping_run.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_map.cpp
@@ -19,7 +20,9 @@ add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_info.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_vocab.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_eval.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_demo.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_demo.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/graph_export.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_export.cpp)
 target_include_directories(placedb_cli PUBLIC ${CMAKE_CURRENT_LIST_DIR}/src)
 # The demo and vocab commands use engine internals (synthetic sequences, the vocabulary file).
 target_link_libraries(placedb_cli

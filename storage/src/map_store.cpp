@@ -372,6 +372,21 @@ std::int64_t MapStore::frameCount(std::int64_t session_id) const {
   return s->columnInt(0);
 }
 
+std::int64_t MapStore::frameCount(FrameOutcome outcome) const {
+  auto s = db_->cached("SELECT count(*) FROM frames WHERE outcome = ?1");
+  s->bind(1, static_cast<std::int64_t>(outcome));
+  s->step();
+  return s->columnInt(0);
+}
+
+std::optional<FrameRecord> MapStore::lastFrame() const {
+  static const std::string select =
+      std::string("SELECT ") + kFrameColumns + " FROM frames ORDER BY id DESC LIMIT 1";
+  auto s = db_->cached(select.c_str());
+  if (!s->step()) return std::nullopt;
+  return readFrame(*s);
+}
+
 // ---- Locations ----
 
 void MapStore::insertLocation(const LocationRecord& l) {
@@ -465,6 +480,13 @@ std::optional<LocationRecord> MapStore::location(std::int64_t location_id) const
   if (!s->step()) return std::nullopt;
   return LocationRecord{s->columnInt(0), s->columnInt(1), s->columnInt(2),
                         static_cast<Tier>(s->columnInt(3)), s->columnOptionalInt(4)};
+}
+
+std::int64_t MapStore::linkCount(LinkType type) const {
+  auto s = db_->cached("SELECT count(*) FROM links WHERE type = ?1");
+  s->bind(1, static_cast<std::int64_t>(type));
+  s->step();
+  return s->columnInt(0);
 }
 
 std::int64_t MapStore::locationCount() const {

@@ -3,10 +3,12 @@
 #include <sqlite3.h>
 
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 
 #include "cli_test_support.h"
+#include "placedb/options.h"
 #include "placedb/storage/map_store.h"
 
 namespace placedb::testing {
@@ -31,7 +33,7 @@ TEST(CliUsage, HelpTeachesEverySubcommand) {
   EXPECT_EQ(top.exit_code, 0);
   EXPECT_NE(top.out.find("Exit status"), std::string::npos) << top.out;
   EXPECT_NE(top.out.find("map busy"), std::string::npos);
-  for (const char* sub : {"map", "query", "info", "vocab", "eval", "demo"}) {
+  for (const char* sub : {"map", "query", "info", "vocab", "eval", "demo", "export", "settings"}) {
     auto help = placedb({sub, "--help"}, dir);
     EXPECT_EQ(help.exit_code, 0) << sub;
     EXPECT_NE(help.out.find("Example"), std::string::npos) << sub << ":\n" << help.out;
@@ -44,6 +46,31 @@ TEST(CliUsage, UsageErrorsExitTwo) {
   expectCleanError(placedb({"frobnicate"}, dir), 2);
   expectCleanError(placedb({"map", "only-a-map.placedb"}, dir), 2);
   expectCleanError(placedb({"map", "m", "s", "--stop-after", "zero"}, dir), 2);
+}
+
+TEST(CliUsage, MapWithoutArgumentsPointsAtItsHelp) {
+  auto dir = scratchDir("CliUsage_map_bare");
+  auto bare = placedb({"map"}, dir);
+  expectCleanError(bare, 2, "placedb map --help");
+}
+
+TEST(CliUsage, SettingsAsJsonWithRtabmapAliases) {
+  auto dir = scratchDir("CliUsage_settings_json");
+  auto listed = placedb({"settings", "--json"}, dir);
+  ASSERT_EQ(listed.exit_code, 0) << describe(listed);
+  const nlohmann::json rows = nlohmann::json::parse(listed.out);
+  ASSERT_EQ(rows.size(), Options::catalogue().size());
+  bool t_loop_seen = false;
+  for (const auto& row : rows) {
+    EXPECT_TRUE(row.contains("default") && row.contains("valid") && row.contains("description"));
+    if (row["key"] == "t_loop") {
+      t_loop_seen = true;
+      EXPECT_EQ(row["aliases"], nlohmann::json::array({"Rtabmap/LoopThr"}));
+    }
+  }
+  EXPECT_TRUE(t_loop_seen);
+  auto text = placedb({"settings"}, dir);
+  EXPECT_NE(text.out.find("Rtabmap/LoopThr"), std::string::npos) << text.out;
 }
 
 TEST(CliErrors, MissingSourceIsIo) {

@@ -131,7 +131,7 @@ TEST(CliRealSequence, MapEvalInfoQueryOnRtabmapSamples) {
                          dir);
   ASSERT_EQ(plotted.exit_code, 0) << describe(plotted);
   for (const char* png : {"precision_recall.png", "score.png", "vocabulary.png",
-                          "quantisation_error.png", "wm_size.png", "time.png"}) {
+                          "quantisation_error.png", "wm_size.png", "time.png", "loop_matrix.png"}) {
     cv::Mat image = cv::imread((dir / "plots" / png).string());
     EXPECT_FALSE(image.empty()) << png;
   }
@@ -143,9 +143,51 @@ TEST(CliRealSequence, MapEvalInfoQueryOnRtabmapSamples) {
   EXPECT_EQ(about["frames"], 84);
   EXPECT_GT(about["words"].get<std::int64_t>(), 0);
   EXPECT_GT(about["locations"].get<std::int64_t>(), 0);
+  // The samples revisit their start: accepted closures are stored as links.
+  EXPECT_GT(about["loop_closures"].get<std::int64_t>(), 0);
+  std::int64_t bad_in_log = 0;
+  {
+    std::ifstream rows(log);
+    for (std::string row; std::getline(rows, row);)
+      bad_in_log += row.find(",bad,") != std::string::npos;
+  }
+  EXPECT_EQ(about["bad_frames"].get<std::int64_t>(), bad_in_log);
+  EXPECT_GT(about["index_words"].get<std::int64_t>(), 0);
+  EXPECT_LE(about["index_words"].get<std::int64_t>(), about["words"].get<std::int64_t>());
   auto text = placedb({"info", map.string()}, dir);
   EXPECT_EQ(text.exit_code, 0);
   EXPECT_NE(text.out.find("session 1: 84 frames"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("frames 84 (" + std::to_string(bad_in_log) + " bad), loop closures " +
+                          about["loop_closures"].dump()),
+            std::string::npos)
+      << text.out;
+  EXPECT_NE(text.out.find("in the kd-index after the last frame"), std::string::npos) << text.out;
+
+  // The graph for other tools: every location and every loop closure, in each format.
+  auto occurrences = [](const fs::path& file, const std::string& needle) {
+    std::ifstream in(file);
+    std::int64_t n = 0;
+    for (std::string line; std::getline(in, line);) n += line.find(needle) != std::string::npos;
+    return n;
+  };
+  const std::int64_t locations = about["locations"], closures = about["loop_closures"];
+  for (const char* format : {"graphml", "g2o", "csv"}) {
+    auto exported = placedb({"export", map.string(),
+                             (dir / (std::string("graph.") + format)).string(), "--format", format},
+                            dir);
+    ASSERT_EQ(exported.exit_code, 0) << describe(exported);
+  }
+  EXPECT_EQ(occurrences(dir / "graph.graphml", "<node id="), locations);
+  EXPECT_EQ(occurrences(dir / "graph.graphml", ">loop_closure<"), closures);
+  EXPECT_EQ(occurrences(dir / "graph.graphml", "<data key=\"appearance_only\">true"), closures);
+  EXPECT_EQ(occurrences(dir / "graph.g2o", "VERTEX_SE3:QUAT"), locations);
+  EXPECT_EQ(occurrences(dir / "graph.g2o", "# placedb appearance-only"), closures);
+  EXPECT_GT(occurrences(dir / "graph.g2o", "EDGE_SE3:QUAT"), closures);  // and odometry
+  EXPECT_EQ(occurrences(dir / "graph.csv" / "locations.csv", ","), locations + 1);
+  EXPECT_EQ(occurrences(dir / "graph.csv" / "links.csv", ",loop_closure,"), closures);
+  expectCleanError(placedb({"export", map.string(), "x", "--format", "dot"}, dir), 2);
+  expectCleanError(
+      placedb({"export", (dir / "absent.placedb").string(), "x", "--format", "csv"}, dir), 3);
 
   // A mapped image finds its own place; the map file is not changed by a query.
   auto before = fs::last_write_time(map);
@@ -228,9 +270,13 @@ TEST(CliSyntheticSequence, VocabularyExport) {
   auto binary = placedb({"vocab", "export", map, (dir / "words.pvoc").string()}, dir);
   ASSERT_EQ(binary.exit_code, 0) << describe(binary);
   EXPECT_GT(fs::file_size(dir / "words.pvoc"), static_cast<std::uintmax_t>(words) * 64 * 4);
-  auto text = placedb({"vocab", "export", map, (dir / "words.txt").string(), "--text"}, dir);
+  auto text =
+      placedb({"vocab", "export", map, (dir / "words.txt").string(), "--format", "rtabmap"}, dir);
   ASSERT_EQ(text.exit_code, 0) << describe(text);
   std::ifstream in(dir / "words.txt");
+  std::string header;
+  std::getline(in, header);
+  EXPECT_EQ(header, "WordID Descriptors...64");  // RTAB-Map reads the dimension from it
   std::int64_t lines = 0;
   for (std::string line; std::getline(in, line);) lines += line.empty() ? 0 : 1;
   EXPECT_EQ(lines, words);
@@ -250,7 +296,7 @@ TEST(CliSyntheticSequence, VocabularyExport) {
   EXPECT_EQ(fileOf(dir / "again.pvoc"), fileOf(dir / "words.pvoc"));
   const auto from_text = (dir / "from_text.placedb").string();
   ASSERT_EQ(placedb({"vocab", "import", (dir / "words.txt").string(), from_text, "--mode", "seed",
-                     "--text"},
+                     "--format", "rtabmap"},
                     dir)
                 .exit_code,
             0);

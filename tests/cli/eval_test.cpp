@@ -3,10 +3,13 @@
 
 #include <cmath>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <random>
 
 #include "eval.h"
 #include "frame_log.h"
+#include "loop_matrix.h"
+#include "run_series.h"
 #include "subprocess.h"
 #include "test_paths.h"
 
@@ -146,6 +149,58 @@ TEST(PrecisionRecall, CurveOverThresholds) {
   EXPECT_DOUBLE_EQ(eval.pr_curve[2].precision, 0.5);
   EXPECT_DOUBLE_EQ(eval.pr_curve[2].recall, 2.0 / 3);
   EXPECT_DOUBLE_EQ(eval.figures.wrong_bar, 0.8);
+}
+
+// A bad frame's figures are gaps (NaN) in the plotted series, not zeros; its time stays.
+TEST(RunSeries, BadFramesAreGapsNotZeros) {
+  CsvTable log;
+  log.header = {"frame",           "candidate_frames", "score",
+                "accepted",        "time_ms",          "outcome",
+                "vocabulary_size", "wm_size",          "mean_quantisation_error"};
+  log.rows = {{"0", "", "0", "0", "10", "new", "100", "0", "0.1"},
+              {"1", "", "0", "0", "4", "bad", "0", "0", "0"},
+              {"2", "", "0.5", "0", "12", "new", "180", "1", "0.2"}};
+  const Evaluation eval = evaluate(log, {}, 0);
+  const RunSeries series = buildRunSeries(log, eval, {});
+  ASSERT_EQ(series.frame.size(), 3u);
+  for (const auto* values :
+       {&series.score, &series.vocabulary_size, &series.wm_size, &series.mean_quantisation_error}) {
+    ASSERT_EQ(values->size(), 3u);
+    EXPECT_TRUE(std::isnan((*values)[1]));
+    EXPECT_FALSE(std::isnan((*values)[2]));
+  }
+  EXPECT_DOUBLE_EQ(series.vocabulary_size[2], 180);
+  EXPECT_DOUBLE_EQ(series.time_ms[1], 4);
+}
+
+// Frame 8 revisits 1 (found), 9 revisits 2 (missed; 9 took 5 instead): white, green, red pixels.
+TEST(LoopMatrix, MarksMissedRightAndWrongPairs) {
+  Evaluation eval;
+  for (std::int64_t f = 0; f < 10; ++f) eval.frames.push_back({f, {}, 0, false, false, {}});
+  eval.frames[8] = {8, {1}, 0.9, true, true, {}};
+  eval.frames[9] = {9, {5}, 0.8, true, false, {}};
+  GroundTruth gt = {{8, {1}}, {9, {2}}};
+  const auto dir = scratchDir("LoopMatrix");
+  const WrittenPlot plot = writeLoopMatrix(eval, gt, dir);
+  const cv::Mat image = cv::imread((dir / plot.file).string(), cv::IMREAD_COLOR);
+  ASSERT_EQ(image.size(), cv::Size(10, 10));
+  EXPECT_EQ(image.at<cv::Vec3b>(9, 2), cv::Vec3b(255, 255, 255));  // missed
+  EXPECT_EQ(image.at<cv::Vec3b>(8, 1), cv::Vec3b(0, 200, 0));      // right
+  EXPECT_EQ(image.at<cv::Vec3b>(9, 5), cv::Vec3b(0, 0, 255));      // wrong
+  EXPECT_EQ(image.at<cv::Vec3b>(0, 0), cv::Vec3b(0, 0, 0));
+}
+
+// A long run is shrunk, and a wrong closure sharing a pixel with a right one stays visible.
+TEST(LoopMatrix, ShrinksLongRunsWithoutHidingWrongClosures) {
+  Evaluation eval;
+  eval.frames.push_back({2500, {10}, 0.9, true, true, {}});
+  eval.frames.push_back({2501, {11}, 0.9, true, false, {}});
+  const auto dir = scratchDir("LoopMatrix_long");
+  const WrittenPlot plot = writeLoopMatrix(eval, {{2500, {10}}}, dir);
+  const cv::Mat image = cv::imread((dir / plot.file).string(), cv::IMREAD_COLOR);
+  EXPECT_LE(image.cols, kLoopMatrixMaxSide);
+  EXPECT_EQ(image.rows, image.cols);
+  EXPECT_EQ(image.at<cv::Vec3b>(2500 / 3, 10 / 3), cv::Vec3b(0, 0, 255));
 }
 
 }  // namespace

@@ -70,5 +70,37 @@ TEST(SettingsInput, RefusesUnknownKeysBadValuesAndMalformedInput) {
   EXPECT_EQ(code(missing_config), ErrorCode::kIo);
 }
 
+TEST(SettingsInput, RtabmapParameterNamesAreAliases) {
+  SettingsInput input;
+  input.assignments = {"Rtabmap/LoopThr=0.2", "Mem/STMSize=12", "SURF/Upright=true"};
+  Options options = resolveOptions(input);
+  EXPECT_DOUBLE_EQ(options.t_loop, 0.2);
+  EXPECT_EQ(options.stm_size, 12);
+  EXPECT_TRUE(options.upright);
+  // Stored and printed under our own keys.
+  EXPECT_EQ(options.toSettings().count("Rtabmap/LoopThr"), 0u);
+  EXPECT_EQ(options.toSettings().at("t_loop"), "0.2");
+  // The same setting under both names is ambiguous.
+  input.assignments = {"Rtabmap/LoopThr=0.2", "t_loop=0.3"};
+  try {
+    resolveOptions(input);
+    ADD_FAILURE() << "t_loop given twice was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("given twice"), std::string::npos) << e.what();
+  }
+  // Every alias names a real setting.
+  for (const auto& alias : Options::aliases())
+    EXPECT_NO_THROW(Options::fromSettings({{alias.key, Options().toSettings().at(alias.key)}}))
+        << alias.alias;
+}
+
+// The word index is placedb's own kd-forest; the help must not name a library it does not link.
+TEST(SettingsInput, HelpNamesNoLibraryPlacedbDoesNotUse) {
+  const std::string help = settingsHelp();
+  EXPECT_EQ(help.find("FLANN"), std::string::npos) << help;
+  EXPECT_NE(help.find("kd_trees"), std::string::npos) << help;
+}
+
 }  // namespace
 }  // namespace placedb::cli

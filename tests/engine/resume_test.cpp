@@ -8,6 +8,7 @@
 
 #include "engine_fixture.h"
 #include "legacy_split_log.h"
+#include "placedb/storage/migrations.h"
 #include "vocabulary/vocabulary.h"
 
 namespace placedb::testing {

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <iterator>
 #include <random>
+#include <sstream>
 
 #include "placedb/error.h"
 #include "test_paths.h"
@@ -236,9 +237,24 @@ TEST_F(VocabularyFile, TextExportRoundTripsBitForBit) {
   ASSERT_EQ(back.descriptors.size(), data_.descriptors.size());
   EXPECT_EQ(
       std::memcmp(back.descriptors.data, data_.descriptors.data, data_.descriptors.total() * 4), 0);
-  std::string first_line;
-  std::getline(std::ifstream(text) >> std::ws, first_line);
-  EXPECT_EQ(first_line.rfind(std::to_string(data_.ids[0]) + " ", 0), 0u) << first_line;
+  // What RTAB-Map's dictionary loader needs: the dimension at the end of the header line, then
+  // lines of an id and exactly that many values.
+  std::ifstream lines(text);
+  std::string line;
+  std::getline(lines, line);
+  EXPECT_EQ(line, "WordID Descriptors...8");
+  std::size_t words = 0;
+  while (std::getline(lines, line)) {
+    std::istringstream fields(line);
+    long long id = 0;
+    fields >> id;
+    EXPECT_EQ(id, data_.ids[words]);
+    int values = 0;
+    for (std::string value; fields >> value;) ++values;
+    EXPECT_EQ(values, 8) << line;
+    ++words;
+  }
+  EXPECT_EQ(words, data_.ids.size());
 
   writeBytes(dir_ / "bad.txt", "0 1 2 3 4 5 6 7 8\n1 1 2 3\n");
   std::string message;
@@ -247,6 +263,38 @@ TEST_F(VocabularyFile, TextExportRoundTripsBitForBit) {
   EXPECT_NE(message.find("line 2"), std::string::npos) << message;
   writeBytes(dir_ / "bad2.txt", "0 1 x\n");
   EXPECT_EQ(codeOf([&] { readVocabularyText(dir_ / "bad2.txt"); }), ErrorCode::kVocabularyRefused);
+}
+
+// RTAB-Map writes "%f " after every value (so a trailing space) below its header line.
+TEST_F(VocabularyFile, ReadsRtabmapDictionaryAndRefusesWrongHeaders) {
+  writeBytes(dir_ / "rtabmap.txt",
+             "WordID Descriptors...3\n1 0.500000 -0.250000 0.000000 \n2 1.000000 2.000000 "
+             "3.000000 \n");
+  const VocabularyData words = readVocabularyText(dir_ / "rtabmap.txt");
+  EXPECT_EQ(words.dim, 3);
+  EXPECT_EQ(words.ids, (std::vector<std::int64_t>{1, 2}));
+  EXPECT_FLOAT_EQ(words.descriptors.at<float>(0, 1), -0.25f);
+  EXPECT_FLOAT_EQ(words.descriptors.at<float>(1, 2), 3.0f);
+
+  std::string message;
+  // The header announces 4 values, the words hold 3.
+  writeBytes(dir_ / "short.txt", "WordID Descriptors...4\n1 0.5 0.5 0.5 \n");
+  EXPECT_EQ(codeOf([&] { readVocabularyText(dir_ / "short.txt"); }, &message),
+            ErrorCode::kVocabularyRefused);
+  EXPECT_NE(message.find("line 2: 3 values, expected 4"), std::string::npos) << message;
+  // The header and the caller disagree on the dimension.
+  EXPECT_EQ(codeOf([&] { readVocabularyText(dir_ / "rtabmap.txt", 64); }, &message),
+            ErrorCode::kVocabularyRefused);
+  EXPECT_NE(message.find("line 1: dimension 3, expected 64"), std::string::npos) << message;
+  writeBytes(dir_ / "header.txt", "WordID Descriptors...x3\n1 0.5 0.5 0.5\n");
+  EXPECT_EQ(codeOf([&] { readVocabularyText(dir_ / "header.txt"); }, &message),
+            ErrorCode::kVocabularyRefused);
+  EXPECT_NE(message.find("line 1: bad header"), std::string::npos) << message;
+  // An empty RTAB-Map dictionary has a header without a number and no word.
+  writeBytes(dir_ / "empty.txt", "WordID Descriptors...\n");
+  EXPECT_EQ(codeOf([&] { readVocabularyText(dir_ / "empty.txt"); }, &message),
+            ErrorCode::kVocabularyRefused);
+  EXPECT_NE(message.find("no word"), std::string::npos) << message;
 }
 
 }  // namespace

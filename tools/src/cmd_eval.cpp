@@ -5,6 +5,7 @@
 #include "cmd_eval.h"
 #include "commands.h"
 #include "frame_log.h"
+#include "loop_matrix.h"
 #include "run_series.h"
 
 namespace placedb::cli {
@@ -18,6 +19,7 @@ EvalOutcome runEvaluation(const EvalRequest& request) {
     RunSeries series =
         buildRunSeries(log, outcome.evaluation, gt, request.map_path, request.session);
     outcome.plots = writePlots(series, outcome.evaluation.pr_curve, request.plots_dir);
+    outcome.plots.push_back(writeLoopMatrix(outcome.evaluation, gt, request.plots_dir));
   }
   return outcome;
 }

@@ -8,6 +8,7 @@
 #include <tuple>
 
 #include "commands.h"
+#include "map_summary.h"
 #include "placedb/error.h"
 #include "placedb/options.h"
 #include "placedb/storage/map_store.h"
@@ -39,8 +40,9 @@ const char* linkName(storage::LinkType type) {
   return "?";
 }
 
-// Everything `info` reports, gathered read-only.
-nlohmann::json inspect(const std::string& path) {
+}  // namespace
+
+nlohmann::json inspectMap(const std::string& path) {
   if (!std::filesystem::exists(path))
     throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", path));
   storage::MapStore store(path, storage::OpenMode::kReadOnly);
@@ -49,7 +51,13 @@ nlohmann::json inspect(const std::string& path) {
   info["file_bytes"] = std::filesystem::file_size(path);
   info["schema_version"] = store.schemaVersion();
   info["frames"] = store.frameCount();
+  info["bad_frames"] = store.frameCount(storage::FrameOutcome::kBad);
   info["words"] = store.wordCount();
+  // Stored words include those of LTM locations; the kd-index holds STM, WM and imported ones.
+  const auto last_frame = store.lastFrame();
+  info["index_words"] =
+      last_frame ? nlohmann::json(last_frame->stats.vocabulary_size) : nlohmann::json();
+  info["loop_closures"] = store.linkCount(storage::LinkType::kLoopClosure);
 
   // Locations per tier, and which session made each one (for the links between sessions).
   std::map<std::int64_t, std::int64_t> session_of;
@@ -109,14 +117,22 @@ nlohmann::json inspect(const std::string& path) {
   return info;
 }
 
+namespace {
+
 std::string describe(const nlohmann::json& info) {
   std::string text = fmt::format(
       "map {}: {:.1f} MiB, schema version {}\n"
-      "frames {}, words {}, locations {} (STM {}, WM {}, LTM {})\n",
+      "frames {} ({} bad), loop closures {}\n"
+      "words {} stored{}\n"
+      "locations {} (STM {}, WM {}, LTM {})\n",
       info["path"].get<std::string>(), info["file_bytes"].get<double>() / (1024.0 * 1024.0),
       info["schema_version"].get<int>(), info["frames"].get<std::int64_t>(),
-      info["words"].get<std::int64_t>(), info["locations"].get<std::int64_t>(),
-      info["locations_per_tier"]["stm"].get<std::int64_t>(),
+      info["bad_frames"].get<std::int64_t>(), info["loop_closures"].get<std::int64_t>(),
+      info["words"].get<std::int64_t>(),
+      info["index_words"].is_null() ? std::string()
+                                    : fmt::format(", {} in the kd-index after the last frame",
+                                                  info["index_words"].get<std::int64_t>()),
+      info["locations"].get<std::int64_t>(), info["locations_per_tier"]["stm"].get<std::int64_t>(),
       info["locations_per_tier"]["wm"].get<std::int64_t>(),
       info["locations_per_tier"]["ltm"].get<std::int64_t>());
   const auto defaults = Options().toSettings();
@@ -161,15 +177,16 @@ Command addInfoCommand(CLI::App& parent) {
   CLI::App* app = parent.add_subcommand("info", "Describe what a map holds (read-only)");
   app->footer(
       "Print a map's sessions (source, frames, state, settings that differ from the defaults),\n"
-      "its locations per memory tier, words, links between sessions, vocabulary imports and file\n"
-      "size. The map is opened read-only; a running `placedb map` is not disturbed.\n\n"
+      "its bad frames and loop closures, its locations per memory tier, its words (stored, and\n"
+      "in the kd-index after the last frame), links between sessions, vocabulary imports and\n"
+      "file size. The map is opened read-only; a running `placedb map` is not disturbed.\n\n"
       "Examples:\n"
       "  placedb info run.placedb\n"
       "  placedb info run.placedb --json | jq '.sessions[].frames'");
   app->add_option("MAP", *path, "map file")->required();
   app->add_flag("--json", *json, "print one JSON object (all settings included)");
   return {app, [path, json]() {
-            nlohmann::json info = inspect(*path);
+            nlohmann::json info = inspectMap(*path);
             std::fputs((*json ? info.dump(2) + "\n" : describe(info)).c_str(), stdout);
             return 0;
           }};

@@ -1,6 +1,7 @@
 #include <fmt/format.h>
 
 #include <cstdio>
+#include <memory>
 
 #include "commands.h"
 #include "mapping_run.h"
@@ -80,9 +81,13 @@ Command addSettingsCommand(CLI::App& parent) {
   CLI::App* app = parent.add_subcommand("settings", "List every engine setting with its default");
   app->footer(
       "List the engine settings accepted by --set KEY=VALUE and --config, with default and\n"
-      "valid values.\n\nExample:\n  placedb settings");
-  return {app, []() {
-            std::fputs(settingsHelp().c_str(), stdout);
+      "valid values, and the RTAB-Map parameter names accepted in their place.\n\n"
+      "Examples:\n  placedb settings\n  placedb settings --json | jq '.[].key'");
+  auto json = std::make_shared<bool>(false);
+  app->add_flag("--json", *json,
+                "print a JSON array of {key, default, valid, description, aliases}");
+  return {app, [json]() {
+            std::fputs((*json ? settingsJson() : settingsHelp()).c_str(), stdout);
             return 0;
           }};
 }

@@ -8,18 +8,11 @@
 #include "placedb/error.h"
 #include "placedb/map.h"
 #include "placedb/storage/map_store.h"
+#include "vocab_transfer.h"
 #include "vocabulary/vocabulary_file.h"
 
 namespace placedb::cli {
-namespace {
 
-struct VocabRequest {
-  std::string map_path, file, mode = "fixed", extractor;
-  bool text = false;
-};
-
-// Every word stored in the map (all memory tiers), ascending ids, with the last session's
-// settings: the extractor and distance unit the words were made with.
 vocab::VocabularyData wordsOfMap(const std::string& map_path) {
   if (!std::filesystem::exists(map_path))
     throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", map_path));
@@ -126,8 +119,6 @@ int runImport(const VocabRequest& request) {
   return 0;
 }
 
-}  // namespace
-
 Command addVocabCommand(CLI::App& parent) {
   auto request = std::make_shared<VocabRequest>();
   CLI::App* app = parent.add_subcommand("vocab", "Export or import a map's visual vocabulary");
@@ -135,13 +126,21 @@ Command addVocabCommand(CLI::App& parent) {
       "Move a visual vocabulary between maps.\n\n"
       "Examples:\n"
       "  placedb vocab export run.placedb words.pvoc           binary, checksummed\n"
-      "  placedb vocab export run.placedb words.txt --text     RTAB-Map text dictionary\n"
+      "  placedb vocab export run.placedb words.txt --format rtabmap   RTAB-Map dictionary\n"
       "  placedb vocab import words.pvoc new.placedb --mode fixed");
   app->require_subcommand(1);
   CLI::App* exporter = app->add_subcommand("export", "Write every word of MAP to FILE");
   exporter->add_option("MAP", request->map_path, "map file")->required();
   exporter->add_option("FILE", request->file, "vocabulary file to write")->required();
-  exporter->add_flag("--text", request->text, "RTAB-Map's text form: `WordID d1 ... dN` lines");
+  const auto addFormat = [&request](CLI::App* command) {
+    command
+        ->add_option("--format", request->format,
+                     "placedb (binary, checksummed) or rtabmap (RTAB-Map's text dictionary: "
+                     "`WordID Descriptors...N`, then `WordID d1 ... dN` lines)")
+        ->check(CLI::IsMember({"placedb", "rtabmap"}));
+    command->add_flag("--text", request->text, "the same as --format rtabmap");
+  };
+  addFormat(exporter);
   CLI::App* importer = app->add_subcommand("import", "Load FILE's words into MAP");
   importer->add_option("FILE", request->file, "vocabulary file")->required();
   importer->add_option("MAP", request->map_path, "map file")->required();
@@ -149,7 +148,7 @@ Command addVocabCommand(CLI::App& parent) {
       ->add_option("--mode", request->mode,
                    "fixed: only these words, none created; seed: start from them")
       ->required();
-  importer->add_flag("--text", request->text, "FILE is in the text form");
+  addFormat(importer);
   importer->add_option("--extractor", request->extractor,
                        "the extractor that made the words (text files only; default surf)");
   importer->footer(
@@ -160,6 +159,7 @@ Command addVocabCommand(CLI::App& parent) {
       "  seed   the vocabulary starts from these words and grows as mapping goes on\n\n"
       "Then map as usual: placedb map new.placedb images/");
   return {app, [request, exporter]() {
+            if (request->format == "rtabmap") request->text = true;
             return exporter->parsed() ? runExport(*request) : runImport(*request);
           }};
 }

@@ -22,6 +22,7 @@ Command addVocabCommand(CLI::App& parent);
 Command addEvalCommand(CLI::App& parent);
 Command addDemoCommand(CLI::App& parent);
 Command addSettingsCommand(CLI::App& parent);
+Command addExportCommand(CLI::App& parent);
 
 // --set, --config and --preset, shared by `map` and `demo`.
 void addSettingsOptions(CLI::App& app, SettingsInput& settings);

@@ -24,22 +24,30 @@ int run(int argc, char** argv) {
       "  placedb eval run.csv gt_pairs.txt --plots plots/   score the run, draw its figures\n"
       "  placedb query run.placedb photo.jpg                where was this photo taken?\n"
       "  placedb info run.placedb                           what the map holds\n"
+      "  placedb export run.placedb g.g2o --format g2o      graph for a pose-graph optimiser\n"
       "  placedb demo --out demo-output                     all of it on a synthetic tour\n",
       PLACEDB_VERSION_STRING)};
   app.name("placedb");
   app.footer(placedb::cli::exitCodeTable());
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string(PLACEDB_VERSION_STRING));
+  // The help to point at is that of the deepest subcommand named on the command line, also when
+  // the error (a missing argument) is reported by the top-level app.
   app.failure_message([](const CLI::App* failed, const CLI::Error& e) {
-    return fmt::format("placedb: error: {}\nRun `{} --help` for usage.\n", e.what(),
-                       failed->get_parent() ? "placedb " + failed->get_name() : "placedb");
+    std::string command = "placedb";
+    for (const CLI::App* a = failed; a;) {
+      if (a->get_parent()) command += " " + a->get_name();
+      const auto chosen = a->get_subcommands();
+      a = chosen.empty() ? nullptr : chosen.front();
+    }
+    return fmt::format("placedb: error: {}\nRun `{} --help` for usage.\n", e.what(), command);
   });
 
   std::vector<Command> commands = {
-      placedb::cli::addMapCommand(app),     placedb::cli::addQueryCommand(app),
-      placedb::cli::addInfoCommand(app),    placedb::cli::addVocabCommand(app),
-      placedb::cli::addEvalCommand(app),    placedb::cli::addDemoCommand(app),
-      placedb::cli::addSettingsCommand(app)};
+      placedb::cli::addMapCommand(app),      placedb::cli::addQueryCommand(app),
+      placedb::cli::addInfoCommand(app),     placedb::cli::addVocabCommand(app),
+      placedb::cli::addEvalCommand(app),     placedb::cli::addDemoCommand(app),
+      placedb::cli::addSettingsCommand(app), placedb::cli::addExportCommand(app)};
 
   try {
     app.parse(argc, argv);

@@ -64,12 +64,21 @@ class Figure {
   Figure(const Figure&) = delete;
   Figure& operator=(const Figure&) = delete;
 
+  // A non-finite value (a bad frame, which has no such figure) leaves a gap in the line rather
+  // than a drop to zero; a finite value between two gaps is drawn as a dot.
   void line(const std::vector<double>& x, const std::vector<double>& y, Colour colour) {
-    std::size_t n = std::min(x.size(), y.size());
-    if (n == 0) return;
+    const std::size_t n = std::min(x.size(), y.size());
     plcol0(colour);
     plwidth(1.5);
-    plline(static_cast<PLINT>(n), x.data(), y.data());
+    for (std::size_t start = 0; start < n;) {
+      while (start < n && !std::isfinite(y[start])) ++start;
+      std::size_t end = start;
+      while (end < n && std::isfinite(y[end])) ++end;
+      const auto count = static_cast<PLINT>(end - start);
+      if (count >= 2) plline(count, x.data() + start, y.data() + start);
+      if (count == 1) plpoin(1, x.data() + start, y.data() + start, 1);
+      start = end;
+    }
   }
   void points(const std::vector<double>& x, const std::vector<double>& y, Colour colour,
               int glyph) {

@@ -7,7 +7,9 @@
 //   quantisation_error.png mean quantisation error per frame
 //   wm_size.png            working-memory size per frame
 //   time.png               time per frame
-// A series that is empty (its column was missing) is not drawn.
+// A series that is empty (its column was missing) is not drawn; a NaN value (a bad frame) is a
+// gap in its line. `placedb eval` adds
+// loop_matrix.png (loop_matrix.h).
 #include <filesystem>
 #include <string>
 #include <vector>

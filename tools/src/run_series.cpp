@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <map>
 
@@ -70,6 +71,17 @@ RunSeries buildRunSeries(const CsvTable& log, const Evaluation& eval, const Grou
   series.wm_size = numericColumn(log, "wm_size");
   series.time_ms = numericColumn(log, "time_ms");
   if (!map_path.empty()) fillFromMap(series, map_path, session);
+  // A bad frame has no hypothesis, words or tiers of its own: its figures are gaps, not zeros.
+  // Its time is real and stays.
+  const int outcome = log.column("outcome");
+  if (outcome >= 0 && log.rows.size() == series.frame.size()) {
+    for (std::size_t i = 0; i < log.rows.size(); ++i) {
+      if (log.cell(i, outcome) != "bad") continue;
+      for (auto* values : {&series.score, &series.vocabulary_size, &series.mean_quantisation_error,
+                           &series.wm_size})
+        if (i < values->size()) (*values)[i] = std::nan("");
+    }
+  }
   return series;
 }
 

@@ -110,7 +110,22 @@ std::string settingsHelp() {
   for (const auto& info : Options::catalogue())
     text += fmt::format("  {:<20} {:<10} {:<22} {}\n", info.key, info.default_value, info.valid,
                         info.description);
+  text += "\nRTAB-Map parameter names accepted for the setting that means the same:\n";
+  for (const auto& a : Options::aliases()) text += fmt::format("  {:<26} {}\n", a.alias, a.key);
   return text;
+}
+
+std::string settingsJson() {
+  std::map<std::string, std::vector<std::string>> aliases_of;
+  for (const auto& a : Options::aliases()) aliases_of[a.key].push_back(a.alias);
+  nlohmann::json rows = nlohmann::json::array();
+  for (const auto& info : Options::catalogue())
+    rows.push_back({{"key", info.key},
+                    {"default", info.default_value},
+                    {"valid", info.valid},
+                    {"description", info.description},
+                    {"aliases", aliases_of[info.key]}});
+  return rows.dump(2) + "\n";
 }
 
 }  // namespace placedb::cli

@@ -30,7 +30,9 @@ Settings parseAssignments(const std::vector<std::string>& assignments);
 Settings readConfigFile(const std::filesystem::path& path);
 Options presetOptions(const std::string& preset);
 Options resolveOptions(const SettingsInput& input);
-// The catalogue as a help text: key, default, valid values, description.
+// The catalogue as a help text: key, default, valid values, description; then the aliases.
 std::string settingsHelp();
+// The catalogue as a JSON array of {key, default, valid, description, aliases}.
+std::string settingsJson();
 
 }  // namespace placedb::cli

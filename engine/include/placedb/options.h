@@ -85,6 +85,14 @@ struct Options {
     std::string description;
   };
   static std::vector<SettingInfo> catalogue();
+
+  // RTAB-Map parameter names accepted in place of the setting that means the same
+  // ("Rtabmap/LoopThr" -> "t_loop"). fromSettings takes them; toSettings writes our keys.
+  struct SettingAlias {
+    std::string alias;
+    std::string key;
+  };
+  static std::vector<SettingAlias> aliases();
 };
 
 }  // namespace placedb

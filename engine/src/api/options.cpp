@@ -8,6 +8,7 @@
 #include <functional>
 #include <limits>
 
+#include "api/setting_aliases.h"
 #include "placedb/error.h"
 
 namespace placedb {
@@ -110,13 +111,17 @@ const std::vector<Row>& table() {
       choice("word_rule", &Options::word_rule, {"greedy", "nndr"}, "greedy|nndr",
              "word creation rule: greedy (paper 000, algorithm 3) or NNDR (algorithms 1-2)"),
       choice("distance_unit", &Options::distance_unit, {"squared", "euclidean"},
-             "squared|euclidean", "unit of t_nd1, t_nd2 and the ratio test (FLANN's is squared)"),
+             "squared|euclidean",
+             "unit of t_nd1, t_nd2 and the ratio test (RTAB-Map's is squared)"),
       real("t_nndr", &Options::t_nndr, 0, 1, "0..1", "nearest/second-nearest ratio threshold"),
-      real("t_nd1", &Options::t_nd1, 0, kInf, ">= 0", "greedy: below this ND a feature takes its word"),
-      real("t_nd2", &Options::t_nd2, 0, kInf, ">= 0", "greedy: above this ND a feature makes a word"),
-      integer("kd_trees", &Options::kd_trees, 1, 64, "1..64", "FLANN randomized kd-trees"),
+      real("t_nd1", &Options::t_nd1, 0, kInf, ">= 0",
+           "greedy: below this ND a feature takes its word"),
+      real("t_nd2", &Options::t_nd2, 0, kInf, ">= 0",
+           "greedy: above this ND a feature makes a word"),
+      integer("kd_trees", &Options::kd_trees, 1, 64, "1..64",
+              "randomized kd-trees of the word index"),
       integer("kd_checks", &Options::kd_checks, 1, 1 << 20, "1..1048576",
-              "FLANN leaves checked per query (recall vs time)"),
+              "kd-tree leaves checked per query (recall vs time)"),
       integer("stm_size", &Options::stm_size, 1, 10000, "1..10000",
               "short-term memory: newest locations, never loop candidates"),
       real("t_sim", &Options::t_sim, 0, 1, "0..1",
@@ -188,7 +193,7 @@ std::string knownKeys() {
 Options Options::fromSettings(const std::map<std::string, std::string>& settings,
                               const Options& base) {
   Options o = base;
-  for (const auto& [key, value] : settings) {
+  for (const auto& [key, value] : withAliasesResolved(settings)) {
     const Row* row = find(key);
     if (!row)
       throw Error(ErrorCode::kInvalidArgument,

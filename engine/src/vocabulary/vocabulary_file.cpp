@@ -116,6 +116,22 @@ std::string payloadBytes(const VocabularyData& data) {
   return bytes;
 }
 
+constexpr const char* kRtabmapHeader = "WordID Descriptors...";
+
+// The dimension a header line `WordID Descriptors...N` announces; 0 when it has no number (the
+// header RTAB-Map writes for an empty dictionary), -1 when the line is no such header.
+int rtabmapHeaderDimension(std::string line) {
+  while (!line.empty() && (line.back() == ' ' || line.back() == '\t' || line.back() == '\r'))
+    line.pop_back();
+  const std::string prefix = kRtabmapHeader;
+  if (line.rfind(prefix, 0) != 0) return -1;
+  const std::string digits = line.substr(prefix.size());
+  if (digits.empty()) return 0;
+  if (digits.size() > 6 || digits.find_first_not_of("0123456789") != std::string::npos) return -1;
+  const int dim = std::stoi(digits);
+  return dim > 0 ? dim : -1;
+}
+
 }  // namespace
 
 VocabularyData snapshotOf(const Vocabulary& vocabulary) {
@@ -261,7 +277,8 @@ void writeVocabularyText(const std::filesystem::path& path, const VocabularyData
   checkData(data);
   std::FILE* file = std::fopen(path.c_str(), "w");
   if (!file) throw Error(ErrorCode::kIo, "cannot write vocabulary text " + path.string());
-  bool ok = true;
+  // RTAB-Map takes the descriptor dimension from the number that ends its header line.
+  bool ok = std::fprintf(file, "%s%d\n", kRtabmapHeader, data.dim) > 0;
   for (std::size_t i = 0; i < data.ids.size() && ok; ++i) {
     ok = std::fprintf(file, "%lld", static_cast<long long>(data.ids[i])) > 0;
     const float* row = data.descriptors.ptr<float>(int(i));
@@ -282,6 +299,16 @@ VocabularyData readVocabularyText(const std::filesystem::path& path, int expecte
   for (std::size_t line_number = 1; std::getline(file, line); ++line_number) {
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
     const std::string where = "line " + std::to_string(line_number) + ": ";
+    if (line_number == 1 && line.rfind("WordID", 0) == 0) {
+      const int header_dim = rtabmapHeaderDimension(line);
+      if (header_dim < 0) refuse(path, where + "bad header (expected `WordID Descriptors...N`)");
+      if (header_dim > 0 && data.dim > 0 && header_dim != data.dim) {
+        refuse(path, where + "dimension " + std::to_string(header_dim) + ", expected " +
+                         std::to_string(data.dim));
+      }
+      if (header_dim > 0) data.dim = header_dim;
+      continue;
+    }
     const char* at = line.c_str();
     char* end = nullptr;
     errno = 0;

@@ -14,8 +14,11 @@
 // damaged file costs at most its own length. Same content gives byte-identical files: there is
 // no timestamp anywhere.
 //
-// The text form is RTAB-Map's dictionary export: one word a line, "WordID d1 ... dN", floats in
-// %.9g so that they read back bit for bit. It holds no created frames (read back as -1).
+// The text form is RTAB-Map's dictionary (VWDictionary::exportDictionary, and what its fixed
+// dictionary loader reads): a header line `WordID Descriptors...N` giving the dimension, then one
+// word a line, "WordID d1 ... dN". placedb writes the floats in %.9g so that they read back bit
+// for bit (RTAB-Map's own %f files read too). It holds no created frames (read back as -1). The
+// reader also takes files without the header line, the dimension then being the first line's.
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -61,7 +64,8 @@ VocabularyData readVocabularyFile(const std::filesystem::path& path,
                                   const VocabularyExpectation& expect = {});
 
 void writeVocabularyText(const std::filesystem::path& path, const VocabularyData& data);
-// expected_dim 0: taken from the first line. Throws kVocabularyRefused on a malformed line.
+// expected_dim 0: taken from the header (or the first word). Throws kVocabularyRefused on a
+// malformed line or a dimension that differs from expected_dim or the header.
 VocabularyData readVocabularyText(const std::filesystem::path& path, int expected_dim = 0);
 
 }  // namespace placedb::vocab

@@ -105,6 +105,8 @@ class MapStore {
   std::optional<std::int64_t> lastFrameIndex(std::int64_t session_id) const;
   std::int64_t frameCount() const;
   std::int64_t frameCount(std::int64_t session_id) const;
+  std::int64_t frameCount(FrameOutcome outcome) const;
+  std::optional<FrameRecord> lastFrame() const;  // the newest, over all sessions
 
   // Locations.
   void insertLocation(const LocationRecord& location);
@@ -150,6 +152,7 @@ class MapStore {
   // Links, stored once per unordered pair and type; inserting again updates the score.
   void insertLink(std::int64_t a, std::int64_t b, LinkType type, std::optional<double> score);
   std::vector<LinkRecord> links(std::int64_t location_id) const;
+  std::int64_t linkCount(LinkType type) const;
   // Locations linked to `location_id` (by `type`, or any link) that sit in `tier`, ascending.
   std::vector<std::int64_t> linkedInTier(std::int64_t location_id, Tier tier,
                                          std::optional<LinkType> type = std::nullopt) const;

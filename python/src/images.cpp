@@ -1,0 +1,42 @@
+#include "images.h"
+
+#include <string>
+
+#include "placedb/error.h"
+
+namespace py = pybind11;
+
+namespace placedb::python {
+namespace {
+
+[[noreturn]] void refuse(const std::string& why) {
+  throw Error(ErrorCode::kInvalidArgument, "image: " + why);
+}
+
+int depthOf(const py::dtype& type) {
+  if (type.equal(py::dtype::of<std::uint8_t>())) return CV_8U;
+  if (type.equal(py::dtype::of<std::uint16_t>())) return CV_16U;
+  if (type.equal(py::dtype::of<float>())) return CV_32F;
+  if (type.equal(py::dtype::of<double>())) return CV_64F;
+  refuse("dtype " + py::str(py::handle(type)).cast<std::string>() +
+         " is not supported (uint8, uint16, float32, float64)");
+}
+
+}  // namespace
+
+cv::Mat imageOf(const py::array& image, py::array& contiguous) {
+  if (image.ndim() != 2 && image.ndim() != 3)
+    refuse(std::to_string(image.ndim()) + " dimensions, expected H x W or H x W x C");
+  const int channels = image.ndim() == 3 ? static_cast<int>(image.shape(2)) : 1;
+  if (channels != 1 && channels != 3 && channels != 4)
+    refuse(std::to_string(channels) + " channels, expected 1, 3 (BGR) or 4 (BGRA)");
+  if (image.shape(0) == 0 || image.shape(1) == 0) refuse("empty");
+  const int depth = depthOf(image.dtype());
+  // Slices and transposes are copied into one C-ordered block; a C-ordered array is used as is.
+  contiguous = py::array::ensure(image, py::array::c_style);
+  if (!contiguous) throw py::error_already_set();
+  return cv::Mat(static_cast<int>(image.shape(0)), static_cast<int>(image.shape(1)),
+                 CV_MAKETYPE(depth, channels), const_cast<void*>(contiguous.data()));
+}
+
+}  // namespace placedb::python

@@ -1,0 +1,327 @@
+// The `placedb` Python module: the engine's public API (engine/include/placedb/map.h) for
+// scripts that map image folders and evaluate in Python. Results are plain read-only objects;
+// failures are placedb.Error subclasses carrying the command line's exit code (errors.h).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "errors.h"
+#include "image_source.h"
+#include "images.h"
+#include "map_rows.h"
+#include "map_summary.h"
+#include "placedb/error.h"
+#include "placedb/map.h"
+#include "placedb/options.h"
+#include "placedb/version.h"
+#include "vocab_transfer.h"
+
+namespace py = pybind11;
+
+namespace placedb::python {
+namespace {
+
+// Settings from a dict of str, int, float or bool values, checked by Options::fromSettings.
+Options optionsOf(const std::optional<py::dict>& settings) {
+  std::map<std::string, std::string> text;
+  if (settings) {
+    for (const auto& [key, value] : *settings) {
+      if (py::isinstance<py::bool_>(value))
+        text[py::str(key)] = value.cast<bool>() ? "true" : "false";
+      else
+        text[py::str(key)] = py::str(value);
+    }
+  }
+  return Options::fromSettings(text);
+}
+
+py::object jsonToPython(const nlohmann::json& value) {
+  return py::module_::import("json").attr("loads")(value.dump());
+}
+
+// A map as Python holds it: closing is explicit (close(), or leaving a `with` block) and any
+// use afterwards is refused instead of reaching a closed engine.
+class PyMap {
+ public:
+  PyMap(const std::string& path, const std::optional<py::dict>& settings, bool read_only)
+      : map_(Map::open(path, optionsOf(settings),
+                       read_only ? Map::Mode::kLocalisation : Map::Mode::kMapping)) {}
+
+  Map& map() {
+    if (!map_) throw Error(ErrorCode::kInvalidArgument, "the map is closed");
+    return *map_;
+  }
+
+  SessionInfo beginSession(const std::string& source) {
+    SessionInfo session = map().beginSession(source);
+    next_index_ = 0;
+    return session;
+  }
+
+  SessionInfo resumeSession(std::int64_t id) {
+    SessionInfo session = map().resumeSession(id);
+    next_index_ = session.last_source_index ? *session.last_source_index + 1 : 0;
+    return session;
+  }
+
+  FrameResult process(const py::array& image, std::optional<std::int64_t> source_index,
+                      const std::string& source_path) {
+    py::array contiguous;
+    cv::Mat mat = imageOf(image, contiguous);
+    const std::int64_t index = source_index.value_or(next_index_);
+    Map& target = map();
+    FrameResult result;
+    {
+      py::gil_scoped_release unlocked;
+      result = target.process(mat, index, source_path);
+    }
+    next_index_ = index + 1;
+    return result;
+  }
+
+  // An image file read as `placedb map` reads it; an unreadable one is recorded as a bad frame.
+  FrameResult processFile(const std::string& path, std::optional<std::int64_t> source_index) {
+    const std::int64_t index = source_index.value_or(next_index_);
+    Map& target = map();
+    FrameResult result;
+    {
+      py::gil_scoped_release unlocked;
+      std::string problem;
+      const cv::Mat image = cli::readImageFile(path, problem);
+      result =
+          image.empty() ? target.recordUnreadable(index, path) : target.process(image, index, path);
+    }
+    next_index_ = index + 1;
+    return result;
+  }
+
+  QueryResult query(const py::array& image, std::size_t top) {
+    py::array contiguous;
+    cv::Mat mat = imageOf(image, contiguous);
+    Map& target = map();
+    py::gil_scoped_release unlocked;
+    return target.query(mat, top);
+  }
+
+  void close() {
+    if (map_) map_->close();
+    map_.reset();
+  }
+
+ private:
+  std::unique_ptr<Map> map_;
+  std::int64_t next_index_ = 0;
+};
+
+std::string outcomeName(FrameOutcome outcome) {
+  switch (outcome) {
+    case FrameOutcome::kNewLocation:
+      return "new_location";
+    case FrameOutcome::kMerged:
+      return "merged";
+    case FrameOutcome::kBad:
+      return "bad";
+  }
+  return "?";
+}
+
+bool isRtabmap(const std::string& format) {
+  if (format != "placedb" && format != "rtabmap")
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("format {} is not valid (valid: placedb|rtabmap)", format));
+  return format == "rtabmap";
+}
+
+std::size_t exportVocabulary(const std::string& map_path, const std::string& file,
+                             const std::string& format) {
+  const bool text = isRtabmap(format);
+  const vocab::VocabularyData words = cli::wordsOfMap(map_path);
+  if (text)
+    vocab::writeVocabularyText(file, words);
+  else
+    vocab::writeVocabularyFile(file, words);
+  return words.ids.size();
+}
+
+std::size_t importVocabulary(const std::string& file, const std::string& map_path,
+                             const std::string& mode, const std::string& format,
+                             const std::string& extractor) {
+  cli::VocabRequest request;
+  request.file = file;
+  request.map_path = map_path;
+  request.mode = mode;
+  request.text = isRtabmap(format);
+  request.extractor = extractor;
+  cli::runImport(request);
+  return static_cast<std::size_t>(cli::inspectMap(map_path)["words"].get<std::int64_t>());
+}
+
+void bindResults(py::module_& m) {
+  py::class_<FrameRef>(m, "FrameRef", "One input frame that a location covers")
+      .def_readonly("frame_id", &FrameRef::frame_id)
+      .def_readonly("session_id", &FrameRef::session_id)
+      .def_readonly("source_index", &FrameRef::source_index)
+      .def_readonly("source_path", &FrameRef::source_path)
+      .def("__repr__", [](const FrameRef& f) {
+        return fmt::format("FrameRef(session={}, index={}, path='{}')", f.session_id,
+                           f.source_index, f.source_path);
+      });
+  py::class_<Hypothesis>(m, "Hypothesis", "The filter's best loop-closure candidate")
+      .def_readonly("location_id", &Hypothesis::location_id, "0: no hypothesis")
+      .def_readonly("frames", &Hypothesis::frames)
+      .def_readonly("posterior", &Hypothesis::posterior)
+      .def_readonly("score", &Hypothesis::score, "loop-closure probability")
+      .def_readonly("accepted", &Hypothesis::accepted)
+      .def_readonly("rejected_reason", &Hypothesis::rejected_reason)
+      .def_readonly("inliers", &Hypothesis::inliers, "geometric check inliers, 0: no check")
+      .def_readonly("matches", &Hypothesis::matches);
+  py::class_<StageTimes>(m, "StageTimes", "Milliseconds per stage")
+      .def_readonly("features", &StageTimes::features)
+      .def_readonly("quantisation", &StageTimes::quantisation)
+      .def_readonly("likelihood", &StageTimes::likelihood)
+      .def_readonly("filter", &StageTimes::filter)
+      .def_readonly("memory", &StageTimes::memory)
+      .def_readonly("storage", &StageTimes::storage)
+      .def_readonly("total", &StageTimes::total);
+  py::class_<FrameResult>(m, "FrameResult", "What process() did with one image")
+      .def_readonly("frame_id", &FrameResult::frame_id)
+      .def_readonly("session_id", &FrameResult::session_id)
+      .def_readonly("source_index", &FrameResult::source_index)
+      .def_property_readonly(
+          "outcome", [](const FrameResult& r) { return outcomeName(r.outcome); },
+          "new_location, merged or bad")
+      .def_readonly("location_id", &FrameResult::location_id, "0 when bad")
+      .def_readonly("hypothesis", &FrameResult::hypothesis)
+      .def_property_readonly("accepted", [](const FrameResult& r) { return r.hypothesis.accepted; })
+      .def_property_readonly("score", [](const FrameResult& r) { return r.hypothesis.score; })
+      .def_property_readonly("inliers", [](const FrameResult& r) { return r.hypothesis.inliers; })
+      .def_property_readonly("matched_frames",
+                             [](const FrameResult& r) { return r.hypothesis.frames; })
+      .def_readonly("times", &FrameResult::times)
+      .def_readonly("feature_count", &FrameResult::feature_count)
+      .def_readonly("words_created", &FrameResult::words_created)
+      .def_readonly("vocabulary_size", &FrameResult::vocabulary_size)
+      .def_readonly("stm_size", &FrameResult::stm_size)
+      .def_readonly("wm_size", &FrameResult::wm_size)
+      .def_readonly("transferred", &FrameResult::transferred)
+      .def_readonly("retrieved", &FrameResult::retrieved)
+      .def_readonly("mean_quantisation_error", &FrameResult::mean_quantisation_error)
+      .def("__repr__", [](const FrameResult& r) {
+        return fmt::format("FrameResult(index={}, outcome={}, score={:.3f}, accepted={})",
+                           r.source_index, outcomeName(r.outcome), r.hypothesis.score,
+                           r.hypothesis.accepted ? "True" : "False");
+      });
+  py::class_<SessionInfo>(m, "SessionInfo")
+      .def_readonly("id", &SessionInfo::id)
+      .def_readonly("source", &SessionInfo::source)
+      .def_readonly("started_at", &SessionInfo::started_at)
+      .def_readonly("ended_at", &SessionInfo::ended_at)
+      .def_readonly("clean_close", &SessionInfo::clean_close)
+      .def_readonly("frames", &SessionInfo::frames)
+      .def_readonly("last_source_index", &SessionInfo::last_source_index);
+  py::class_<QueryMatch>(m, "QueryMatch")
+      .def_readonly("location_id", &QueryMatch::location_id)
+      .def_readonly("similarity", &QueryMatch::similarity)
+      .def_readonly("frames", &QueryMatch::frames);
+  py::class_<QueryResult>(m, "QueryResult")
+      .def_readonly("feature_count", &QueryResult::feature_count)
+      .def_readonly("matches", &QueryResult::matches, "best first")
+      .def_readonly("time_ms", &QueryResult::time_ms);
+}
+
+void bindMap(py::module_& m) {
+  py::class_<PyMap>(m, "Map",
+                    "A placedb map file: Map(path, settings=None, read_only=False). read_only "
+                    "opens it for queries and never changes the file.")
+      .def(py::init<const std::string&, const std::optional<py::dict>&, bool>(), py::arg("path"),
+           py::arg("settings") = py::none(), py::arg("read_only") = false)
+      .def("begin_session", &PyMap::beginSession, py::arg("source"),
+           "Starts a new session; source names where the images come from")
+      .def("resume_session", &PyMap::resumeSession, py::arg("session_id"),
+           "Continues an interrupted session with its own settings")
+      .def("last_session", [](PyMap& self) { return self.map().lastSession(); })
+      .def("sessions", [](PyMap& self) { return self.map().sessions(); })
+      .def("process", &PyMap::process, py::arg("image"), py::arg("source_index") = py::none(),
+           py::arg("source_path") = "",
+           "Maps one numpy image (grey H x W, or BGR H x W x 3); commits it before returning. "
+           "source_index defaults to the previous frame's plus one.")
+      .def("process_file", &PyMap::processFile, py::arg("path"),
+           py::arg("source_index") = py::none(),
+           "Maps one image file; an unreadable file is recorded as a bad frame")
+      .def("query", &PyMap::query, py::arg("image"), py::arg("top") = 5,
+           "The stored locations (STM and WM) that most resemble the image; changes nothing")
+      .def(
+          "import_vocabulary",
+          [](PyMap& self, const std::string& file, const std::string& mode,
+             const std::string& format) {
+            if (mode != "fixed" && mode != "seed")
+              throw Error(ErrorCode::kInvalidArgument,
+                          fmt::format("mode {} is not valid (valid: fixed|seed)", mode));
+            return self.map().importVocabulary(
+                file, isRtabmap(format),
+                mode == "fixed" ? VocabularyMode::kFixed : VocabularyMode::kSeed);
+          },
+          py::arg("file"), py::arg("mode") = "fixed", py::arg("format") = "placedb")
+      .def_property_readonly("settings",
+                             [](PyMap& self) { return self.map().options().toSettings(); })
+      .def_property_readonly("path", [](PyMap& self) { return self.map().path(); })
+      .def("info", [](PyMap& self) { return jsonToPython(cli::inspectMap(self.map().path())); })
+      .def("loop_closures", [](PyMap& self) { return loopClosureRows(self.map().path()); })
+      .def("close", &PyMap::close, "Ends the session cleanly; safe to call twice")
+      .def("__enter__", [](PyMap& self) -> PyMap& { return self; })
+      .def("__exit__", [](PyMap& self, const py::args&) { self.close(); });
+}
+
+}  // namespace
+}  // namespace placedb::python
+
+PYBIND11_MODULE(placedb, m) {
+  using namespace placedb;
+  using namespace placedb::python;
+  m.doc() = "placedb: appearance-based loop-closure detection with a SQLite map";
+  m.attr("__version__") = PLACEDB_VERSION_STRING;
+  registerErrors(m);
+  bindResults(m);
+  bindMap(m);
+  m.def(
+      "info", [](const std::string& path) { return jsonToPython(cli::inspectMap(path)); },
+      py::arg("path"), "What `placedb info --json` prints, as a dict (read-only)");
+  m.def(
+      "image_paths",
+      [](const std::string& source) {
+        std::vector<std::string> images, skipped;
+        if (std::filesystem::is_directory(source))
+          cli::listImageFolder(source, images, skipped);
+        else
+          images = cli::readListFile(source);
+        return images;
+      },
+      py::arg("source"),
+      "The images of a folder (natural order) or a list file, as `placedb map` reads them");
+  m.def("loop_closures", &loopClosureRows, py::arg("path"),
+        "The rows of the map's v_loop_closures view, as dicts (read-only)");
+  m.def("settings", []() {
+    py::list rows;
+    for (const auto& s : Options::catalogue())
+      rows.append(py::dict(py::arg("key") = s.key, py::arg("default") = s.default_value,
+                           py::arg("valid") = s.valid, py::arg("description") = s.description));
+    return rows;
+  });
+  m.def("vocab_export", &exportVocabulary, py::arg("map"), py::arg("file"),
+        py::arg("format") = "placedb",
+        "Writes every word of the map to file (placedb binary, or rtabmap text); returns the "
+        "number of words");
+  m.def("vocab_import", &importVocabulary, py::arg("file"), py::arg("map"),
+        py::arg("mode") = "fixed", py::arg("format") = "placedb", py::arg("extractor") = "",
+        "Starts a new map (or one without frames and words) from a vocabulary file; returns "
+        "the number of words");
+}

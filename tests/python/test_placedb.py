@@ -1,0 +1,152 @@
+"""The placedb Python module: mapping numpy images, results, queries, info, loop closures,
+vocabularies and errors. Run by ctest (python_module) with PYTHONPATH at the built module."""
+import os
+import pathlib
+
+import numpy as np
+import pytest
+
+import placedb
+
+
+def scene(seed):
+    """A grey 320 x 240 image of discs: SURF finds corners and blobs that differ per seed."""
+    rng = np.random.default_rng(seed)
+    image = np.full((240, 320), 128, np.float32)
+    yy, xx = np.mgrid[0:240, 0:320]
+    for _ in range(60):
+        cx, cy, r = rng.uniform(0, 320), rng.uniform(0, 240), rng.uniform(4, 30)
+        image[(xx - cx) ** 2 + (yy - cy) ** 2 < r * r] = rng.uniform(0, 255)
+    image += rng.normal(0, 6, image.shape)
+    return np.clip(image, 0, 255).astype(np.uint8)
+
+
+def test_maps_grey_and_bgr_images_and_reports_each_frame(tmp_path):
+    path = str(tmp_path / "run.placedb")
+    with placedb.Map(path) as m:
+        session = m.begin_session("numpy")
+        assert session.id == 1
+        grey = m.process(scene(0))
+        assert grey.source_index == 0
+        assert grey.outcome in ("new_location", "merged")
+        assert grey.feature_count > 0
+        assert grey.times.total > 0
+        bgr = np.dstack([scene(1)] * 3)
+        colour = m.process(bgr, source_path="colour.png")
+        assert colour.source_index == 1  # counts on from the previous frame
+        assert colour.location_id > 0
+        assert isinstance(colour.hypothesis.frames, list)
+        assert colour.accepted is False and colour.score >= 0 and colour.inliers >= 0
+        assert m.last_session().frames == 2
+    info = placedb.info(path)
+    assert info["frames"] == 2
+    assert info["sessions"][0]["source"] == "numpy"
+
+
+def test_revisited_views_close_loops_that_loop_closures_lists(tmp_path):
+    path = str(tmp_path / "loop.placedb")
+    first_pass = 24
+    results = []
+    with placedb.Map(path) as m:
+        m.begin_session("tour")
+        for seed in list(range(first_pass)) + list(range(8)):  # then the first 8 again
+            results.append(m.process(scene(seed)))
+    accepted = [r for r in results if r.accepted]
+    assert accepted, [repr(r) for r in results]
+    # A closure links a revisit to the location of the same view on the first pass.
+    for r in accepted:
+        assert r.source_index >= first_pass
+        matched = [f.source_index for f in r.matched_frames]
+        assert r.source_index - first_pass in matched, (repr(r), matched)
+    rows = placedb.loop_closures(path)
+    assert len(rows) >= len(accepted)
+    assert {"location_a", "location_b", "score", "first_frame_a", "first_frame_b"} <= set(rows[0])
+    assert all(row["session_a"] == row["session_b"] == 1 for row in rows)
+
+    with placedb.Map(path, read_only=True) as m:
+        found = m.query(scene(3), top=3)
+        assert found.matches
+        # Seed 3 was seen at frames 3 and first_pass + 3.
+        best = {f.source_index for f in found.matches[0].frames}
+        assert best & {3, first_pass + 3}, best
+        assert m.loop_closures() == rows
+
+
+def test_vocabulary_export_and_import_both_formats(tmp_path):
+    path = str(tmp_path / "words.placedb")
+    with placedb.Map(path) as m:
+        m.begin_session("words")
+        for seed in (0, 1, 2):
+            m.process(scene(seed))
+    words = placedb.info(path)["words"]
+    assert words > 0
+    for fmt, name in (("placedb", "words.pvoc"), ("rtabmap", "words.txt")):
+        exported = str(tmp_path / name)
+        assert placedb.vocab_export(path, exported, format=fmt) == words
+        target = str(tmp_path / ("from-" + name + ".placedb"))
+        assert placedb.vocab_import(exported, target, mode="seed", format=fmt) == words
+        again = str(tmp_path / ("again-" + name))
+        placedb.vocab_export(target, again, format=fmt)
+        assert pathlib.Path(again).read_bytes() == pathlib.Path(exported).read_bytes()
+    first_line = (tmp_path / "words.txt").read_text().splitlines()[0]
+    assert first_line == "WordID Descriptors...64"
+
+
+def test_errors_carry_the_exit_code_category(tmp_path):
+    with pytest.raises(placedb.InvalidArgument) as bad_setting:
+        placedb.Map(str(tmp_path / "a.placedb"), settings={"t_loop": "lots"})
+    assert bad_setting.value.exit_code == 2
+    assert bad_setting.value.category == "invalid_argument"
+    assert "t_loop" in str(bad_setting.value)
+
+    not_a_map = tmp_path / "notes.placedb"
+    not_a_map.write_bytes(b"these are notes, not a map\n" * 100)
+    before = not_a_map.read_bytes()
+    with pytest.raises(placedb.MapRefused) as refused:
+        placedb.Map(str(not_a_map))
+    assert refused.value.exit_code == 4
+    assert isinstance(refused.value, placedb.Error)
+    assert not_a_map.read_bytes() == before
+
+    with pytest.raises(placedb.IoError) as missing:
+        placedb.info(str(tmp_path / "absent.placedb"))
+    assert missing.value.exit_code == 3
+
+    with pytest.raises(placedb.VocabularyRefused) as vocabulary:
+        junk = tmp_path / "junk.pvoc"
+        junk.write_bytes(b"definitely not a vocabulary")
+        placedb.vocab_import(str(junk), str(tmp_path / "v.placedb"))
+    assert vocabulary.value.exit_code == 8
+    assert not (tmp_path / "v.placedb").exists()
+
+    with placedb.Map(str(tmp_path / "b.placedb"), settings={"t_loop": 0.05, "upright": True}) as m:
+        assert m.settings["t_loop"] == "0.05" and m.settings["upright"] == "true"
+        m.begin_session("errors")
+        with pytest.raises(placedb.InvalidArgument, match="dtype"):
+            m.process(np.zeros((240, 320), dtype=np.int64))
+        with pytest.raises(placedb.InvalidArgument, match="channels"):
+            m.process(np.zeros((240, 320, 2), dtype=np.uint8))
+    with pytest.raises(placedb.InvalidArgument, match="closed"):
+        m.process(np.zeros((240, 320), dtype=np.uint8))
+
+
+def test_maps_image_files_of_a_list_and_records_unreadable_ones(tmp_path):
+    datasets = pathlib.Path(os.environ.get("PLACEDB_DATASETS_DIR", "../shared/datasets"))
+    frames = datasets / "rtabmap_samples" / "frames.txt"
+    if not frames.exists():
+        pytest.skip(f"{frames} is absent")
+    paths = placedb.image_paths(str(frames))
+    assert len(paths) > 3
+    broken = tmp_path / "broken.jpg"
+    broken.write_bytes(b"not a jpeg")
+    with placedb.Map(str(tmp_path / "files.placedb")) as m:
+        m.begin_session(str(frames))
+        results = [m.process_file(p) for p in paths[:3] + [str(broken)]]
+    assert [r.source_index for r in results] == [0, 1, 2, 3]
+    assert all(r.feature_count > 0 for r in results[:3])
+    assert results[3].outcome == "bad"
+
+
+def test_settings_catalogue():
+    keys = {s["key"] for s in placedb.settings()}
+    assert {"t_loop", "kd_trees", "word_rule"} <= keys

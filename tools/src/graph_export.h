@@ -1,0 +1,60 @@
+#pragma once
+// A map as a graph for pose-graph optimisers and graph tools (`placedb export`): every location
+// with the frames it covers, the odometry-order links between consecutive locations and the
+// loop-closure links, with the relative pose of a closure where the map stores one.
+//
+//   csv      OUT is a folder: locations.csv and links.csv
+//   graphml  one GraphML file (Gephi, yEd, networkx)
+//   g2o      one g2o file: VERTEX_SE3:QUAT per location at the origin (placedb keeps no poses)
+//            and EDGE_SE3:QUAT per link; a link without a measured pose is the identity with a
+//            unit information matrix, announced by a `# placedb appearance-only A B` comment
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace placedb::cli {
+
+struct GraphFrame {
+  std::int64_t session_id = 0;
+  std::int64_t source_index = 0;
+};
+
+struct GraphLocation {
+  std::int64_t id = 0;
+  std::int64_t session_id = 0;
+  std::string tier;  // stm | wm | ltm
+  std::int64_t weight = 0;
+  std::vector<GraphFrame> frames;  // by frame id
+};
+
+// Where the geometric check measured it: the rotation from b to a and the direction (unit
+// length; a monocular check knows no scale) of a's translation seen from b.
+struct RelativePose {
+  std::array<double, 4> rotation_xyzw{0, 0, 0, 1};
+  std::array<double, 3> translation_direction{0, 0, 0};
+};
+
+struct GraphLink {
+  std::int64_t location_a = 0, location_b = 0;  // a < b
+  std::string type;                             // odometry | loop_closure | merge
+  std::optional<double> score;
+  std::optional<RelativePose> pose;  // none: appearance only
+};
+
+struct MapGraph {
+  std::vector<GraphLocation> locations;  // by id
+  std::vector<GraphLink> links;          // by (a, b)
+};
+
+// Reads the map read-only. Throws placedb::Error(kIo) when it is missing, and the storage
+// errors of a refused map.
+MapGraph readMapGraph(const std::string& map_path);
+
+// Throws placedb::Error(kInvalidArgument) for another format, kIo when OUT cannot be written.
+void writeMapGraph(const MapGraph& graph, const std::string& format,
+                   const std::filesystem::path& out);
+
+}  // namespace placedb::cli
