@@ -1,6 +1,6 @@
 // Temporal consistency: a hypothesis with fewer inliers than geometry_min_inliers passes with
 // temporal_min_inliers when it lies near the previous frame's loop closure, and the closure it
-// continues from survives closing and reopening the map.
+// continues from survives closing and reopening the map (the WM keypoint cache starts empty).
 #include <gtest/gtest.h>
 
 #include <cstdlib>

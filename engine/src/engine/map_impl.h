@@ -9,6 +9,7 @@
 
 #include "engine/engine_state.h"
 #include "engine/geometric_check.h"
+#include "engine/keypoint_cache.h"
 #include "features/feature_extractor.h"
 #include "filter/bayes_filter.h"
 #include "filter/inverted_index.h"
@@ -70,16 +71,22 @@ class MapImpl final : public Map {
     std::int64_t location = 0;  // kNewPlace (-1) when there is none
     bool passed = false;        // the geometric check (or no check) let it through
     int inliers = 0;
-    int matches = 0;  // descriptor matches behind the inliers
-    bool temporal = false;  // passed on temporal_min_inliers, near the last accepted closure
+    int matches = 0;        // descriptor matches behind the inliers
+    bool temporal = false;  // passed on temporal_max_nfa, near the last accepted closure
+    int checked = 0;        // candidates the check ran on
+    double log10_nfa = 0;   // the reported candidate's number of false alarms, log10
   };
   Verified verifyHypothesis(const FilterOutcome& outcome, const Features& features,
+                            const std::vector<std::int64_t>& word_of_feature,
                             const std::vector<LocationSimilarity>& similarities,
                             std::int64_t frame_id);
   // WM locations within temporal_radius links of the last accepted loop closure, sorted; empty
   // when temporal consistency is off or that closure is too old or from another session.
   std::vector<LocationId> nearLastClosure(std::int64_t frame_id) const;
-  GeometricView viewOf(std::int64_t location_id, const std::vector<storage::WordRef>& refs) const;
+  // The relaxed rule (temporal_*) for a candidate near the last accepted closure.
+  bool passesNearLastClosure(const GeometricResult& g) const;
+  const CachedKeypoints& keypointsOf(std::int64_t location_id);  // from the cache or the file
+  GeometricView viewOf(const CachedKeypoints& keypoints) const;
   void retrieveNeighbours(std::int64_t hypothesis, FrameWrite& write, FrameResult& result);
   void transferToLtm(std::int64_t hypothesis, double frame_seconds, FrameWrite& write,
                      FrameResult& result);
@@ -97,6 +104,7 @@ class MapImpl final : public Map {
   LinkGraph graph_;      // links among STM and WM locations
   std::unique_ptr<MemoryTiers> tiers_;
   std::unique_ptr<BayesFilter> filter_;
+  KeypointCache keypoint_cache_;  // of WM locations the geometric check compared frames with
   EngineCounters counters_;
   VocabularyStateWriter vocabulary_state_;
   std::vector<std::int64_t> imported_words_;  // ascending; never leave the index

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "engine/map_impl.h"
+#include "engine/option_mapping.h"
 #include "features/image_conversion.h"
 
 namespace placedb {
@@ -147,7 +148,7 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
       w.refs.push_back({q.word_of_feature[i], k.x, k.y, k.size, k.angle, k.response});
       kept.push_back(features.descriptors.row(static_cast<int>(i)));
     }
-    if (options_.geometry_min_inliers > 0 && features.descriptors.type() == CV_32F)
+    if (geometricCheckOn(options_) && features.descriptors.type() == CV_32F)
       w.keypoint_descriptors = encodeDescriptors(kept);
     enterWorkingMemory(tiers_->push(r.location_id), w);
     counters_.last_location = r.location_id;
@@ -167,7 +168,11 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
   stage = Clock::now();
   FilterOutcome outcome = filter_->update(tiers_->wm(), similarities, graph_);
   counters_.previous_score = filter_->state().previous_score;
-  const Verified verified = verifyHypothesis(outcome, features, similarities, r.frame_id);
+  const auto verify_start = Clock::now();
+  const Verified verified =
+      verifyHypothesis(outcome, features, q.word_of_feature, similarities, r.frame_id);
+  times.verification = msSince(verify_start);
+  r.hypothesis.candidates_checked = verified.checked;
   const std::int64_t hypothesis = verified.location;
   const bool has_hypothesis = hypothesis != kNewPlace;
   std::string reason;
@@ -176,6 +181,7 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
     r.hypothesis.posterior = filter_->posteriorOf(hypothesis);
     r.hypothesis.inliers = verified.inliers;
     r.hypothesis.matches = verified.matches;
+    r.hypothesis.log10_nfa = verified.log10_nfa;
     r.hypothesis.accepted = outcome.accepted && verified.passed;
     // EVALUATION.md: the score is 0 where a check other than the final threshold rejected it.
     const bool vetoed = !verified.passed || outcome.reason == RejectReason::kRatioTest;
@@ -195,8 +201,8 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
     if (!r.hypothesis.accepted) {
       reason = verified.passed
                    ? std::string(toString(outcome.reason))
-                   : fmt::format("geometry: {} inliers of {} matches, {} needed", verified.inliers,
-                                 verified.matches, options_.geometry_min_inliers);
+                   : fmt::format("geometry: {} inliers of {} matches, NFA 1e{:.1f}",
+                                 verified.inliers, verified.matches, verified.log10_nfa);
     }
   } else {
     reason = toString(outcome.reason);

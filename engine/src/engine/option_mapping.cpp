@@ -51,10 +51,17 @@ MemorySettings toMemorySettings(const Options& o) {
 
 GeometricCheckSettings toGeometricCheckSettings(const Options& o) {
   GeometricCheckSettings g;
+  g.rule = o.geometry_rule == "nfa" ? GeometryRule::kNfa : GeometryRule::kInliers;
+  g.max_nfa = o.geometry_max_nfa;
   g.min_inliers = o.geometry_min_inliers;
+  g.min_overlap = o.geometry_min_overlap;
   g.max_error_px = o.geometry_max_error_px;
   g.match_ratio = o.geometry_match_ratio;
   return g;
+}
+
+bool geometricCheckOn(const Options& o) {
+  return o.geometry_rule == "nfa" ? o.geometry_max_nfa > 0 : o.geometry_min_inliers > 0;
 }
 
 }  // namespace placedb
