@@ -76,7 +76,7 @@ TEST(GeometricCheck, SameWordsAtUnrelatedPlacesFail) {
 TEST(GeometricCheck, BothRulesPassARigidScene) {
   std::mt19937 rng(23);
   TwoViews v = rigidScene(rng);
-  for (GeometryRule rule : {GeometryRule::kInliers, GeometryRule::kNfa}) {
+  for (GeometryRule rule : {GeometryRule::kInliers, GeometryRule::kNfa, GeometryRule::kEither}) {
     GeometricCheckSettings settings;
     settings.rule = rule;
     const GeometricResult r = checkGeometry(v.query, v.candidate, settings);
@@ -111,6 +111,23 @@ TEST(GeometricCheck, RepeatedWordsPairNothing) {
   const GeometricResult r = checkGeometry(v.query, v.candidate, GeometricCheckSettings());
   EXPECT_FALSE(r.from_words);
   EXPECT_FALSE(r.passed);
+}
+
+TEST(GeometricCheck, EitherRulePassesFewPairsWithStrongEvidence) {
+  std::mt19937 rng(29);
+  TwoViews v = rigidScene(rng);
+  // 10 exact pairs: below the 13 inliers the count asks, far beyond chance.
+  v.query.points.resize(10);
+  v.candidate.points.resize(10);
+  v.query.descriptors = v.query.descriptors.rowRange(0, 10).clone();
+  v.candidate.descriptors = v.candidate.descriptors.rowRange(0, 10).clone();
+  GeometricCheckSettings settings;
+  settings.max_nfa = 1e-3;
+  settings.min_overlap = 0;
+  EXPECT_FALSE(checkGeometry(v.query, v.candidate, settings).passed) << "inliers rule";
+  settings.rule = GeometryRule::kEither;
+  const GeometricResult r = checkGeometry(v.query, v.candidate, settings);
+  EXPECT_TRUE(r.passed) << "log10 NFA " << r.log10_nfa;
 }
 
 TEST(GeometricCheck, TooLittleOverlapFails) {

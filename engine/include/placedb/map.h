@@ -47,7 +47,7 @@ struct Hypothesis {
   std::string rejected_reason;    // why it was not accepted; empty when accepted
   int inliers = 0;                // the geometric check's epipolar inliers (0: no check ran)
   int matches = 0;                // ... among this many correspondences
-  double log10_nfa = 0;           // the check's number of false alarms, log10 (0: no check)
+  double log10_nfa = 0;           // the check's false alarms, log10 (0: no check; 99: no model)
   int candidates_checked = 0;     // locations the geometric check ran on this frame
 };
 

@@ -145,10 +145,11 @@ const std::vector<Row>& table() {
               "it in the geometric check (0 = the best hypothesis alone)"),
       integer("hypothesis_top_similar", &Options::hypothesis_top_similar, 0, 1000, "0..1000",
               "this many most similar WM locations also compete with the filter's best hypothesis"),
-      choice("geometry_rule", &Options::geometry_rule, {"inliers", "nfa"}, "inliers|nfa",
+      choice("geometry_rule", &Options::geometry_rule, {"inliers", "nfa", "either"},
+             "inliers|nfa|either",
              "how the geometric check decides: inliers (geometry_min_inliers pairs within "
-             "geometry_max_error_px of one fundamental matrix) or nfa (a contrario: "
-             "geometry_max_nfa and geometry_min_overlap)"),
+             "geometry_max_error_px of one fundamental matrix), nfa (a contrario: "
+             "geometry_max_nfa and geometry_min_overlap) or either of the two"),
       integer("geometry_min_inliers", &Options::geometry_min_inliers, 0, 10000, "0..10000",
               "inliers rule: epipolar inliers a loop-closure hypothesis needs; 0 = no geometric "
               "check"),

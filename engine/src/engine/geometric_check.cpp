@@ -45,7 +45,7 @@ cv::Mat decodeDescriptors(const std::vector<std::uint8_t>& bytes, int dim) {
 }
 
 bool strongerThan(const GeometricResult& a, const GeometricResult& b, GeometryRule rule) {
-  return rule == GeometryRule::kInliers ? a.inliers > b.inliers : a.log10_nfa < b.log10_nfa;
+  return rule == GeometryRule::kNfa ? a.log10_nfa < b.log10_nfa : a.inliers > b.inliers;
 }
 
 int minimumInliers(double overlap, int keypoints) {
@@ -175,19 +175,17 @@ GeometricResult fit(const Pairs& pairs, cv::Size2f extent, int keypoints,
   fs.iterations = s.iterations;
   fs.max_nfa = s.max_nfa;
   fs.max_error_px = s.max_error_px;
-  fs.stop_when_passed = s.rule == GeometryRule::kNfa;
-  fs.stop_at_inliers = s.rule == GeometryRule::kInliers ? s.min_inliers : 0;
+  const bool count = s.rule != GeometryRule::kNfa, chance = s.rule != GeometryRule::kInliers;
+  fs.stop_when_passed = chance;
+  fs.stop_at_inliers = count ? s.min_inliers : 0;
   const EpipolarFit f = fitEpipolar(pairs.a, pairs.b, extent, fs);
   r.log10_nfa = f.log10_nfa;
-  if (s.rule == GeometryRule::kInliers) {
-    r.inliers = f.most_within_max_error;
-    // A 7-point model fits any 7 pairs: agreement starts at the 8th.
-    r.passed = r.inliers >= std::max(s.min_inliers, 8);
-  } else {
-    r.inliers = f.inliers;
-    const int floor = minimumInliers(s.min_overlap, keypoints);
-    r.passed = f.passed && f.inliers >= floor;
-  }
+  r.inliers = count ? f.most_within_max_error : f.inliers;
+  // A 7-point model fits any 7 pairs: agreement starts at the 8th.
+  const bool by_count = count && f.most_within_max_error >= std::max(s.min_inliers, 8);
+  const bool by_chance =
+      chance && f.passed && f.inliers >= minimumInliers(s.min_overlap, keypoints);
+  r.passed = by_count || by_chance;
   return r;
 }
 

@@ -12,11 +12,11 @@
 //
 // Both sets of pairs go through one RANSAC over 7-point fundamental matrices (epipolar_fit.h:
 // the most distinctive pairs sampled first, a fixed seed, and an early exit as soon as the rule
-// below is met). Two rules decide:
+// below is met). Three rules:
 //
-// inliers (the default): one model must put min_inliers pairs within max_error_px of their
-// epipolar lines. 13 sits just above the 9-12 that wrong hypotheses reach by chance at
-// 240x192; on smaller images with ~90 keypoints right hypotheses rarely reach it.
+// inliers: one model must put min_inliers pairs within max_error_px of their epipolar lines.
+// 13 sits just above the 9-12 that wrong hypotheses reach by chance at 240x192; on smaller
+// images with ~90 keypoints right hypotheses rarely reach it.
 //
 // nfa: (1) an a-contrario test: the best model's number of false alarms, i.e. how many models
 // this consistent unrelated pairs would give by chance given the number of pairs, the image's
@@ -24,11 +24,14 @@
 // pairs share one epipolar geometry at all, and adapts to the evidence: 9 of 10 pairs within
 // 1 px is as telling as 20 of 80, and a small image is judged by the same rule. (2) An
 // overlap: the inliers must be at least min_overlap of the smaller view's keypoints. Two
-// places along one street are views of one rigid scene too (the far facades): they pass (1)
-// with a handful of pairs but overlap little, and the ground truth of a loop closure is "the
-// same place", not "a common geometry". Measured in bench/quality/README.md: it lifts
-// lip6_outdoor_160x128 but lets a few such same-street closures through on lip6 and
-// rtabmap_samples, so it is not the default.
+// places along one street are views of one rigid scene too (the far facades): at NFA <= 1 they
+// pass (1) with a handful of pairs, and the ground truth of a loop closure is "the same
+// place", not "a common geometry"; lip6 and rtabmap_samples then get false closures.
+//
+// either (the default): the inliers rule, or the nfa rule at a strict max_nfa (1e-3): a few
+// pairs agreeing far beyond chance (12 of 13 within a pixel on a 160x128 image) pass without
+// the count, while the same-street pairs, at NFA 1e-1..1e1, do not. bench/quality/README.md
+// has the figures of all three.
 #include <cstdint>
 #include <vector>
 
@@ -39,10 +42,11 @@ namespace placedb {
 enum class GeometryRule {
   kInliers,  // the most pairs one model puts within max_error_px >= min_inliers
   kNfa,      // NFA <= max_nfa and inliers >= min_overlap x keypoints (above)
+  kEither,   // either of the two (the default)
 };
 
 struct GeometricCheckSettings {
-  GeometryRule rule = GeometryRule::kInliers;
+  GeometryRule rule = GeometryRule::kInliers;  // the engine's default is kEither (options.h)
   int min_inliers = 13;       // inliers rule: pairs within max_error_px of one model
   double max_nfa = 1.0;       // nfa rule: expected false alarms at most
   double min_overlap = 0.05;  // nfa rule: and inliers at least this share of the keypoints

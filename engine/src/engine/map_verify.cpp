@@ -12,6 +12,9 @@
 namespace placedb {
 namespace {
 
+// Reported for a fit that found no model beyond its 7-pair sample.
+constexpr double kNoModel = 99.0;
+
 double similarityOf(const std::vector<LocationSimilarity>& similarities, LocationId id) {
   for (const auto& s : similarities)
     if (s.location == id) return s.similarity;
@@ -62,16 +65,18 @@ GeometricView MapImpl::viewOf(const CachedKeypoints& keypoints) const {
 }
 
 bool MapImpl::passesNearLastClosure(const GeometricResult& g) const {
-  if (options_.geometry_rule == "nfa")
-    return g.log10_nfa <= std::log10(options_.temporal_max_nfa) &&
-           g.inliers >= minimumInliers(options_.temporal_min_overlap, g.keypoints);
-  return g.inliers >= options_.temporal_min_inliers;
+  const bool by_count = options_.geometry_rule != "nfa" && options_.temporal_min_inliers > 0 &&
+                        g.inliers >= options_.temporal_min_inliers;
+  const bool by_chance = options_.geometry_rule != "inliers" && options_.temporal_max_nfa > 0 &&
+                         g.log10_nfa <= std::log10(options_.temporal_max_nfa) &&
+                         g.inliers >= minimumInliers(options_.temporal_min_overlap, g.keypoints);
+  return by_count || by_chance;
 }
 
 std::vector<LocationId> MapImpl::nearLastClosure(std::int64_t frame_id) const {
   // Without the geometric check there is no chance level to relax.
-  const bool relaxed = options_.geometry_rule == "nfa" ? options_.temporal_max_nfa > 0
-                                                       : options_.temporal_min_inliers > 0;
+  const bool relaxed = (options_.geometry_rule != "nfa" && options_.temporal_min_inliers > 0) ||
+                       (options_.geometry_rule != "inliers" && options_.temporal_max_nfa > 0);
   if (!relaxed || !geometricCheckOn(options_) || counters_.last_closure_location == 0) return {};
   if (counters_.last_closure_session != *session_id_ ||
       frame_id - counters_.last_closure_frame > options_.temporal_max_gap)
@@ -184,14 +189,14 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
     v.passed = best->passed;
     v.inliers = best->inliers;
     v.matches = best->matches;
-    v.log10_nfa = best->log10_nfa;
+    v.log10_nfa = std::min(best->log10_nfa, kNoModel);
   }
   if (!v.passed && best_near && passesNearLastClosure(*best_near)) {
     // Too weak for a place on its own, not for one that continues the last closure.
     v.location = near_location;
     v.inliers = best_near->inliers;
     v.matches = best_near->matches;
-    v.log10_nfa = best_near->log10_nfa;
+    v.log10_nfa = std::min(best_near->log10_nfa, kNoModel);
     v.passed = true;
     v.temporal = true;
   }

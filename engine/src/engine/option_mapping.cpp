@@ -51,7 +51,9 @@ MemorySettings toMemorySettings(const Options& o) {
 
 GeometricCheckSettings toGeometricCheckSettings(const Options& o) {
   GeometricCheckSettings g;
-  g.rule = o.geometry_rule == "nfa" ? GeometryRule::kNfa : GeometryRule::kInliers;
+  g.rule = o.geometry_rule == "nfa"      ? GeometryRule::kNfa
+           : o.geometry_rule == "either" ? GeometryRule::kEither
+                                         : GeometryRule::kInliers;
   g.max_nfa = o.geometry_max_nfa;
   g.min_inliers = o.geometry_min_inliers;
   g.min_overlap = o.geometry_min_overlap;
@@ -61,7 +63,9 @@ GeometricCheckSettings toGeometricCheckSettings(const Options& o) {
 }
 
 bool geometricCheckOn(const Options& o) {
-  return o.geometry_rule == "nfa" ? o.geometry_max_nfa > 0 : o.geometry_min_inliers > 0;
+  const bool count = o.geometry_rule != "nfa" && o.geometry_min_inliers > 0;
+  const bool chance = o.geometry_rule != "inliers" && o.geometry_max_nfa > 0;
+  return count || chance;
 }
 
 }  // namespace placedb
