@@ -1,5 +1,5 @@
 // The geometric check must pass one rigid scene seen from two poses and refuse the same words
-// scattered at unrelated places.
+// scattered at unrelated places; unique shared words spare it the descriptor matching.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -51,11 +51,11 @@ TwoViews rigidScene(std::mt19937& rng) {
 TEST(GeometricCheck, OneRigidSceneFromTwoPosesPasses) {
   std::mt19937 rng(7);
   TwoViews v = rigidScene(rng);
-  GeometricCheckSettings settings;
-  settings.min_inliers = 13;
-  const GeometricResult r = checkGeometry(v.query, v.candidate, settings);
+  const GeometricResult r = checkGeometry(v.query, v.candidate, GeometricCheckSettings());
+  EXPECT_TRUE(r.passed) << "log10 NFA " << r.log10_nfa;
   EXPECT_EQ(r.matches, kPoints);
-  EXPECT_GE(r.inliers, kPoints - 2);  // exact projections: all but RANSAC's rounding agree
+  EXPECT_GE(r.inliers, kPoints - 2);  // exact projections: all agree but for rounding
+  EXPECT_FALSE(r.from_words) << "no words given: descriptors only";
 }
 
 TEST(GeometricCheck, SameWordsAtUnrelatedPlacesFail) {
@@ -66,7 +66,87 @@ TEST(GeometricCheck, SameWordsAtUnrelatedPlacesFail) {
   for (auto& p : v.candidate.points) p = cv::Point2f(u(rng), w(rng));
   const GeometricResult r = checkGeometry(v.query, v.candidate, GeometricCheckSettings());
   EXPECT_EQ(r.matches, kPoints);
-  EXPECT_LT(r.inliers, 20);  // chance agreement (13 here), far below the rigid scene's ~60
+  EXPECT_LT(r.inliers, 20);  // chance agreement, far below the rigid scene's ~60
+  GeometricCheckSettings nfa;
+  nfa.rule = GeometryRule::kNfa;
+  const GeometricResult a = checkGeometry(v.query, v.candidate, nfa);
+  EXPECT_FALSE(a.passed) << a.inliers << " inliers, log10 NFA " << a.log10_nfa;
+}
+
+TEST(GeometricCheck, BothRulesPassARigidScene) {
+  std::mt19937 rng(23);
+  TwoViews v = rigidScene(rng);
+  for (GeometryRule rule : {GeometryRule::kInliers, GeometryRule::kNfa, GeometryRule::kEither}) {
+    GeometricCheckSettings settings;
+    settings.rule = rule;
+    const GeometricResult r = checkGeometry(v.query, v.candidate, settings);
+    EXPECT_TRUE(r.passed) << static_cast<int>(rule);
+    EXPECT_GE(r.inliers, settings.min_inliers);
+  }
+}
+
+TEST(GeometricCheck, UniqueSharedWordsPassWithoutDescriptorMatching) {
+  std::mt19937 rng(13);
+  TwoViews v = rigidScene(rng);
+  for (int i = 0; i < kPoints; ++i) {
+    v.query.words.push_back(1000 + i);
+    v.candidate.words.push_back(1000 + i);
+  }
+  // The descriptors disagree: only the words can pair the keypoints.
+  v.candidate.descriptors = randomUnitDescriptors(kPoints, rng);
+  const GeometricResult r = checkGeometry(v.query, v.candidate, GeometricCheckSettings());
+  EXPECT_TRUE(r.passed);
+  EXPECT_TRUE(r.from_words);
+  EXPECT_EQ(r.matches, kPoints);
+}
+
+TEST(GeometricCheck, RepeatedWordsPairNothing) {
+  std::mt19937 rng(17);
+  TwoViews v = rigidScene(rng);
+  for (int i = 0; i < kPoints; ++i) {
+    v.query.words.push_back(1000 + i / 2);  // every word twice
+    v.candidate.words.push_back(1000 + i / 2);
+  }
+  v.candidate.descriptors = randomUnitDescriptors(kPoints, rng);
+  const GeometricResult r = checkGeometry(v.query, v.candidate, GeometricCheckSettings());
+  EXPECT_FALSE(r.from_words);
+  EXPECT_FALSE(r.passed);
+}
+
+TEST(GeometricCheck, EitherRulePassesFewPairsWithStrongEvidence) {
+  std::mt19937 rng(29);
+  TwoViews v = rigidScene(rng);
+  // 10 exact pairs: below the 13 inliers the count asks, far beyond chance.
+  v.query.points.resize(10);
+  v.candidate.points.resize(10);
+  v.query.descriptors = v.query.descriptors.rowRange(0, 10).clone();
+  v.candidate.descriptors = v.candidate.descriptors.rowRange(0, 10).clone();
+  GeometricCheckSettings settings;
+  settings.max_nfa = 1e-3;
+  settings.min_overlap = 0;
+  EXPECT_FALSE(checkGeometry(v.query, v.candidate, settings).passed) << "inliers rule";
+  settings.rule = GeometryRule::kEither;
+  const GeometricResult r = checkGeometry(v.query, v.candidate, settings);
+  EXPECT_TRUE(r.passed) << "log10 NFA " << r.log10_nfa;
+}
+
+TEST(GeometricCheck, TooLittleOverlapFails) {
+  std::mt19937 rng(19);
+  TwoViews v = rigidScene(rng);
+  GeometricCheckSettings settings;
+  settings.rule = GeometryRule::kNfa;
+  settings.min_overlap = 0.5;
+  // 60 views of one scene, but each image has 200 keypoints of which the scene is 30 %.
+  std::uniform_real_distribution<float> u(0.f, 240.f), w(0.f, 192.f);
+  for (GeometricView* view : {&v.query, &v.candidate}) {
+    cv::vconcat(view->descriptors, randomUnitDescriptors(140, rng), view->descriptors);
+    for (int i = 0; i < 140; ++i) view->points.emplace_back(u(rng), w(rng));
+  }
+  const GeometricResult r = checkGeometry(v.query, v.candidate, settings);
+  EXPECT_EQ(r.keypoints, 200);
+  EXPECT_FALSE(r.passed) << r.inliers << " inliers need 100";
+  settings.min_overlap = 0.2;
+  EXPECT_TRUE(checkGeometry(v.query, v.candidate, settings).passed);
 }
 
 TEST(GeometricCheck, AmbiguousDescriptorsGiveNoMatches) {
@@ -89,7 +169,9 @@ TEST(GeometricCheck, IsDeterministic) {
   const GeometricResult a = checkGeometry(v.query, v.candidate, GeometricCheckSettings());
   const GeometricResult b = checkGeometry(v.query, v.candidate, GeometricCheckSettings());
   EXPECT_EQ(a.inliers, b.inliers);  // a resumed run must repeat every decision
-  EXPECT_GE(a.inliers, kPoints / 2 - 2);
+  EXPECT_EQ(a.log10_nfa, b.log10_nfa);
+  EXPECT_TRUE(a.passed);
+  EXPECT_GE(a.inliers, GeometricCheckSettings().min_inliers);  // the search stops there
 }
 
 }  // namespace

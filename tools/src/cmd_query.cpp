@@ -112,7 +112,7 @@ Command addQueryCommand(CLI::App& parent) {
       "whether it shows a known place. Candidates are the locations most like the image by\n"
       "bag of words (short-term and working memory) and by place code (every tier, long-term\n"
       "memory included); each goes through the geometric check against its stored keypoints.\n"
-      "Verdict: 'known' when the best candidate passes the check (geometry_min_inliers),\n"
+      "Verdict: 'known' when the best candidate passes the check (geometry_rule),\n"
       "'unknown' when none does, 'unverified' when the map's settings switch the check off.\n"
       "Prints the best locations (verified first, by inliers), their tier, the frames they\n"
       "cover and how many locations were searched. The map is opened read-only with the\n"

@@ -65,7 +65,9 @@ const std::vector<std::string>& FrameLogWriter::columns() {
                                                     "rejected_reason",
                                                     "raw_score",
                                                     "inliers",
-                                                    "matches"};
+                                                    "matches",
+                                                    "verification_ms",
+                                                    "candidates_checked"};
   return kColumns;
 }
 
@@ -125,7 +127,9 @@ void FrameLogWriter::write(const FrameResult& r) {
                                      csvField(r.hypothesis.rejected_reason),
                                      number(r.hypothesis.score),
                                      std::to_string(r.hypothesis.inliers),
-                                     std::to_string(r.hypothesis.matches)};
+                                     std::to_string(r.hypothesis.matches),
+                                     millis(t.verification),
+                                     std::to_string(r.hypothesis.candidates_checked)};
   if (fields.size() != columns().size())
     throw Error(ErrorCode::kInternal, "frame log: fields and columns differ");
   std::string row;

@@ -28,6 +28,7 @@ enum class FrameOutcome { kNewLocation = 0, kMerged = 1, kBad = 2 };
 struct StageTimes {  // milliseconds
   double features = 0, quantisation = 0, likelihood = 0, filter = 0, memory = 0, storage = 0,
          total = 0;
+  double verification = 0;  // the geometric check, part of filter
 };
 
 struct FrameRef {  // one input frame that a location covers
@@ -45,7 +46,9 @@ struct Hypothesis {
   bool accepted = false;
   std::string rejected_reason;    // why it was not accepted; empty when accepted
   int inliers = 0;                // the geometric check's epipolar inliers (0: no check ran)
-  int matches = 0;                // ... among this many descriptor matches
+  int matches = 0;                // ... among this many correspondences
+  double log10_nfa = 0;           // the check's false alarms, log10 (0: no check; 99: no model)
+  int candidates_checked = 0;     // locations the geometric check ran on this frame
 };
 
 struct FrameResult {
@@ -83,7 +86,7 @@ struct QueryMatch {  // localisation: a stored location that resembles the query
   double similarity = 0;       // eq. 5 against the location's signature; 0 for LTM (no words in RAM)
   double code_similarity = 0;  // cosine of the place codes, any tier
   int inliers = 0;             // the geometric check's epipolar inliers (0 when it did not run)
-  bool verified = false;       // inliers reach geometry_min_inliers
+  bool verified = false;       // the geometric check passed (geometry_rule)
   std::vector<FrameRef> frames;
 };
 

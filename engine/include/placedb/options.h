@@ -54,15 +54,24 @@ struct Options {
   int hypothesis_radius = 3;           // WM locations this many links from the filter's best
                                        // hypothesis compete with it; the check picks among them
   int hypothesis_top_similar = 5;      // ... and so do this many most similar WM locations
-  int geometry_min_inliers = 13;       // epipolar RANSAC inliers a hypothesis needs, 0 = no check
-  double geometry_max_error_px = 3.0;  // RANSAC distance to the epipolar line, pixels
+  std::string geometry_rule = "either";  // inliers | nfa | either: how the epipolar check
+                                       // decides (geometric_check.h)
+  int geometry_min_inliers = 13;       // inliers rule: pairs one fundamental matrix must put
+                                       // within geometry_max_error_px; 0 = no check
+  double geometry_max_nfa = 0.001;     // nfa rule: a contrario number of false alarms at most;
+                                       // 0 = no check
+  double geometry_min_overlap = 0.05;  // nfa rule: and inliers at least this share of keypoints
+  double geometry_max_error_px = 3.0;  // epipolar distances above this never count as agreement
   double geometry_match_ratio = 0.8;   // descriptor ratio test for the check's matches
 
   // --- temporal consistency (iBoW-LCD's islands; RTAB-Map's closures that follow the graph) ---
-  // A hypothesis that misses geometry_min_inliers still passes with temporal_min_inliers when
-  // it lies within temporal_radius WM links of the location accepted as loop closure at most
-  // temporal_max_gap frames before; those locations are checked as candidates too.
-  int temporal_min_inliers = 7;        // 0 = off
+  // A hypothesis that misses the check's rule still passes a relaxed one (temporal_min_inliers,
+  // or temporal_max_nfa and temporal_min_overlap) when it lies within temporal_radius WM links
+  // of the location accepted as loop closure at most temporal_max_gap frames before; those
+  // locations are checked as candidates too.
+  int temporal_min_inliers = 7;        // inliers rule (and either); 0 = off
+  double temporal_max_nfa = 100;       // nfa rule (and either); 0 = off
+  double temporal_min_overlap = 0.025; // nfa rule (and either)
   int temporal_radius = 2;             // links from the last accepted closure
   int temporal_max_gap = 1;            // frames since the last accepted closure (1 = previous)
 

@@ -157,20 +157,38 @@ const std::vector<Row>& table() {
               "it in the geometric check (0 = the best hypothesis alone)"),
       integer("hypothesis_top_similar", &Options::hypothesis_top_similar, 0, 1000, "0..1000",
               "this many most similar WM locations also compete with the filter's best hypothesis"),
+      choice("geometry_rule", &Options::geometry_rule, {"inliers", "nfa", "either"},
+             "inliers|nfa|either",
+             "how the geometric check decides: inliers (geometry_min_inliers pairs within "
+             "geometry_max_error_px of one fundamental matrix), nfa (a contrario: "
+             "geometry_max_nfa and geometry_min_overlap) or either of the two"),
       integer("geometry_min_inliers", &Options::geometry_min_inliers, 0, 10000, "0..10000",
-              "epipolar RANSAC inliers a loop-closure hypothesis needs; 0 = no geometric check"),
+              "inliers rule: epipolar inliers a loop-closure hypothesis needs; 0 = no geometric "
+              "check"),
+      real("geometry_max_nfa", &Options::geometry_max_nfa, 0, 1e12, "0..1e12",
+           "nfa rule: a hypothesis passes when its best epipolar fit would arise by chance this "
+           "many times or fewer (a contrario NFA); 0 = no geometric check"),
+      real("geometry_min_overlap", &Options::geometry_min_overlap, 0, 1, "0..1",
+           "nfa rule: the epipolar inliers must also be at least this share of the keypoints of "
+           "the image or location with fewer of them"),
       real("geometry_max_error_px", &Options::geometry_max_error_px, 0.1, 100, "0.1..100",
-           "RANSAC threshold: distance of a keypoint from its epipolar line, in pixels"),
+           "geometric check: largest distance of a keypoint from its epipolar line that counts "
+           "as agreement, in pixels"),
       real("geometry_match_ratio", &Options::geometry_match_ratio, 0.1, 1, "0.1..1",
            "geometric check: nearest/second-nearest descriptor distance ratio for a match"),
       integer("temporal_min_inliers", &Options::temporal_min_inliers, 0, 10000, "0..10000",
-              "inliers that suffice for a hypothesis near the last accepted loop closure (see "
-              "temporal_radius, temporal_max_gap); 0 = off"),
+              "inliers rule: inliers that suffice for a hypothesis near the last accepted loop "
+              "closure (see temporal_radius, temporal_max_gap); 0 = off"),
+      real("temporal_max_nfa", &Options::temporal_max_nfa, 0, 1e12, "0..1e12",
+           "nfa rule: NFA that suffices for a hypothesis near the last accepted loop closure "
+           "(with temporal_min_overlap); 0 = off"),
+      real("temporal_min_overlap", &Options::temporal_min_overlap, 0, 1, "0..1",
+           "nfa rule: inliers' share of the keypoints that such a hypothesis needs"),
       integer("temporal_radius", &Options::temporal_radius, 0, 100, "0..100",
-              "WM links from the last accepted loop closure within which temporal_min_inliers "
+              "WM links from the last accepted loop closure within which the relaxed rule "
               "applies; those locations are also checked as candidates"),
       integer("temporal_max_gap", &Options::temporal_max_gap, 1, 100000, "1..100000",
-              "frames since the last accepted loop closure for temporal_min_inliers to apply "
+              "frames since the last accepted loop closure for the relaxed rule to apply "
               "(1 = the previous frame's)"),
   };
   return rows;
@@ -236,7 +254,9 @@ Options Options::paperPreset() {
   o.hypothesis_radius = 0;
   o.hypothesis_top_similar = 0;
   o.geometry_min_inliers = 0;
+  o.geometry_max_nfa = 0;
   o.temporal_min_inliers = 0;
+  o.temporal_max_nfa = 0;
   return o;
 }
 

@@ -1,19 +1,14 @@
 #include "engine/geometric_check.h"
 
+#include "engine/epipolar_fit.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <opencv2/calib3d.hpp>
-#include <opencv2/features2d.hpp>
+#include <limits>
+#include <opencv2/core/hal/hal.hpp>
 
 namespace placedb {
-namespace {
-
-// RANSAC's 8-point fundamental matrix needs 8 pairs.
-constexpr int kMinimalPairs = 8;
-
-}  // namespace
-
 std::vector<std::uint8_t> encodeDescriptors(const cv::Mat& descriptors) {
   const int dim = descriptors.cols;
   std::vector<std::uint8_t> out;
@@ -49,34 +44,166 @@ cv::Mat decodeDescriptors(const std::vector<std::uint8_t>& bytes, int dim) {
   return out;
 }
 
+bool strongerThan(const GeometricResult& a, const GeometricResult& b, GeometryRule rule) {
+  return rule == GeometryRule::kNfa ? a.log10_nfa < b.log10_nfa : a.inliers > b.inliers;
+}
+
+int minimumInliers(double overlap, int keypoints) {
+  return static_cast<int>(std::ceil(overlap * keypoints - 1e-9));
+}
+
+cv::Size2f keypointExtent(const std::vector<cv::Point2f>& points) {
+  if (points.empty()) return {1.f, 1.f};
+  float x0 = points[0].x, x1 = x0, y0 = points[0].y, y1 = y0;
+  for (const auto& p : points) {
+    x0 = std::min(x0, p.x);
+    x1 = std::max(x1, p.x);
+    y0 = std::min(y0, p.y);
+    y1 = std::max(y1, p.y);
+  }
+  return {std::max(1.f, x1 - x0), std::max(1.f, y1 - y0)};
+}
+
+namespace {
+
+struct Pairs {
+  std::vector<cv::Point2f> a, b;
+  std::vector<int> query_index, candidate_index;
+  void add(const GeometricView& query, int qi, const GeometricView& candidate, int ci) {
+    a.push_back(query.points[static_cast<std::size_t>(qi)]);
+    b.push_back(candidate.points[static_cast<std::size_t>(ci)]);
+    query_index.push_back(qi);
+    candidate_index.push_back(ci);
+  }
+};
+
+// Keypoints whose word occurs exactly once in the view, by word.
+std::vector<std::pair<std::int64_t, int>> uniqueWords(const std::vector<std::int64_t>& words) {
+  std::vector<std::pair<std::int64_t, int>> all;
+  all.reserve(words.size());
+  for (std::size_t i = 0; i < words.size(); ++i)
+    if (words[i] >= 0) all.emplace_back(words[i], static_cast<int>(i));
+  std::sort(all.begin(), all.end());
+  std::vector<std::pair<std::int64_t, int>> unique;
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    const bool repeated = (i > 0 && all[i - 1].first == all[i].first) ||
+                          (i + 1 < all.size() && all[i + 1].first == all[i].first);
+    if (!repeated) unique.push_back(all[i]);
+  }
+  return unique;
+}
+
+Pairs wordPairs(const GeometricView& query, const GeometricView& candidate) {
+  Pairs pairs;
+  if (query.words.size() != query.points.size() ||
+      candidate.words.size() != candidate.points.size())
+    return pairs;
+  const auto q = uniqueWords(query.words), c = uniqueWords(candidate.words);
+  for (std::size_t i = 0, j = 0; i < q.size() && j < c.size();) {
+    if (q[i].first < c[j].first) {
+      ++i;
+    } else if (c[j].first < q[i].first) {
+      ++j;
+    } else {
+      pairs.add(query, q[i++].second, candidate, c[j++].second);
+    }
+  }
+  return pairs;
+}
+
+// Ratio-test matches, one per candidate keypoint (the closest: a repeated texture cannot pile
+// its matches onto one point), most distinctive first, then the word pairs they miss.
+Pairs descriptorPairs(const GeometricView& query, const GeometricView& candidate,
+                      const Pairs& words, double ratio) {
+  Pairs pairs;
+  if (query.descriptors.rows < 2 || candidate.descriptors.rows < 2) return words;
+  struct Kept {
+    int query, candidate;
+    float distance, ratio;
+  };
+  // Brute force on this thread: a parallel matcher waits for pool threads on a busy machine
+  // longer than the work takes.
+  std::vector<Kept> kept;
+  const int dim = query.descriptors.cols;
+  const float ratio_sq = static_cast<float>(ratio * ratio);
+  for (int q = 0; q < query.descriptors.rows; ++q) {
+    const float* qd = query.descriptors.ptr<float>(q);
+    float d1 = std::numeric_limits<float>::max(), d2 = d1;
+    int best = -1;
+    for (int c = 0; c < candidate.descriptors.rows; ++c) {
+      const float d = cv::hal::normL2Sqr_(qd, candidate.descriptors.ptr<float>(c), dim);
+      if (d < d1) {
+        d2 = d1;
+        d1 = d;
+        best = c;
+      } else if (d < d2) {
+        d2 = d;
+      }
+    }
+    if (best >= 0 && d1 < ratio_sq * d2)
+      kept.push_back({q, best, std::sqrt(d1), d2 > 0 ? std::sqrt(d1 / d2) : 0.f});
+  }
+  std::sort(kept.begin(), kept.end(), [](const Kept& x, const Kept& y) {
+    return x.candidate != y.candidate ? x.candidate < y.candidate : x.distance < y.distance;
+  });
+  std::vector<Kept> one;
+  for (std::size_t k = 0; k < kept.size(); ++k)
+    if (k == 0 || kept[k].candidate != kept[k - 1].candidate) one.push_back(kept[k]);
+  std::stable_sort(one.begin(), one.end(),
+                   [](const Kept& x, const Kept& y) { return x.ratio < y.ratio; });
+  std::vector<char> query_used(query.points.size(), 0), candidate_used(candidate.points.size(), 0);
+  for (const auto& k : one) {
+    pairs.add(query, k.query, candidate, k.candidate);
+    query_used[static_cast<std::size_t>(k.query)] = 1;
+    candidate_used[static_cast<std::size_t>(k.candidate)] = 1;
+  }
+  for (std::size_t i = 0; i < words.a.size(); ++i) {
+    const int qi = words.query_index[i], ci = words.candidate_index[i];
+    if (query_used[static_cast<std::size_t>(qi)] || candidate_used[static_cast<std::size_t>(ci)])
+      continue;
+    pairs.add(query, qi, candidate, ci);
+  }
+  return pairs;
+}
+
+GeometricResult fit(const Pairs& pairs, cv::Size2f extent, int keypoints,
+                    const GeometricCheckSettings& s) {
+  GeometricResult r;
+  r.keypoints = keypoints;
+  r.matches = static_cast<int>(pairs.a.size());
+  EpipolarFitSettings fs;
+  fs.iterations = s.iterations;
+  fs.max_nfa = s.max_nfa;
+  fs.max_error_px = s.max_error_px;
+  const bool count = s.rule != GeometryRule::kNfa, chance = s.rule != GeometryRule::kInliers;
+  fs.stop_when_passed = chance;
+  fs.stop_at_inliers = count ? s.min_inliers : 0;
+  const EpipolarFit f = fitEpipolar(pairs.a, pairs.b, extent, fs);
+  r.log10_nfa = f.log10_nfa;
+  r.inliers = count ? f.most_within_max_error : f.inliers;
+  // A 7-point model fits any 7 pairs: agreement starts at the 8th.
+  const bool by_count = count && f.most_within_max_error >= std::max(s.min_inliers, 8);
+  const bool by_chance =
+      chance && f.passed && f.inliers >= minimumInliers(s.min_overlap, keypoints);
+  r.passed = by_count || by_chance;
+  return r;
+}
+
+}  // namespace
+
 GeometricResult checkGeometry(const GeometricView& query, const GeometricView& candidate,
                               const GeometricCheckSettings& settings) {
-  GeometricResult result;
-  if (query.descriptors.rows < 2 || candidate.descriptors.rows < 2) return result;
-  cv::BFMatcher matcher(cv::NORM_L2);
-  std::vector<std::vector<cv::DMatch>> knn;
-  matcher.knnMatch(query.descriptors, candidate.descriptors, knn, 2);
-  // Ratio test, then one match per candidate keypoint (the closest) so that a repeated
-  // texture cannot pile its matches onto one point.
-  std::vector<cv::DMatch> kept;
-  for (const auto& m : knn)
-    if (m.size() == 2 && m[0].distance < settings.match_ratio * m[1].distance) kept.push_back(m[0]);
-  std::sort(kept.begin(), kept.end(), [](const cv::DMatch& a, const cv::DMatch& b) {
-    return a.trainIdx != b.trainIdx ? a.trainIdx < b.trainIdx : a.distance < b.distance;
-  });
-  std::vector<cv::Point2f> a, b;
-  for (std::size_t k = 0; k < kept.size(); ++k) {
-    if (k > 0 && kept[k].trainIdx == kept[k - 1].trainIdx) continue;
-    a.push_back(query.points[static_cast<std::size_t>(kept[k].queryIdx)]);
-    b.push_back(candidate.points[static_cast<std::size_t>(kept[k].trainIdx)]);
+  const cv::Size2f extent = keypointExtent(candidate.points);
+  const int keypoints = static_cast<int>(std::min(query.points.size(), candidate.points.size()));
+  const Pairs words = wordPairs(query, candidate);
+  GeometricResult by_words = fit(words, extent, keypoints, settings);
+  if (by_words.passed) {
+    by_words.from_words = true;
+    return by_words;
   }
-  result.matches = static_cast<int>(a.size());
-  if (result.matches < kMinimalPairs) return result;
-  std::vector<unsigned char> mask;
-  cv::Mat f = cv::findFundamentalMat(a, b, cv::FM_RANSAC, settings.max_error_px, 0.99, mask);
-  if (f.empty()) return result;
-  result.inliers = static_cast<int>(std::count(mask.begin(), mask.end(), 1));
-  return result;
+  const GeometricResult by_descriptors = fit(
+      descriptorPairs(query, candidate, words, settings.match_ratio), extent, keypoints, settings);
+  return strongerThan(by_words, by_descriptors, settings.rule) ? by_words : by_descriptors;
 }
 
 }  // namespace placedb

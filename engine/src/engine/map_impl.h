@@ -9,6 +9,7 @@
 
 #include "engine/engine_state.h"
 #include "engine/geometric_check.h"
+#include "engine/keypoint_cache.h"
 #include "features/feature_extractor.h"
 #include "filter/bayes_filter.h"
 #include "filter/inverted_index.h"
@@ -81,8 +82,9 @@ class MapImpl final : public Map {
   void searchLongTermMemory(const Features& features, FrameWrite& write, FrameResult& result);
   // Verifies the filter's outcome and records the decision; returns the reported hypothesis.
   std::int64_t decideLoopClosure(const FilterOutcome& outcome, const Features& features,
+                                 const Quantised& q,
                                  const std::vector<LocationSimilarity>& similarities,
-                                 FrameResult& result, FrameWrite& write);
+                                 FrameResult& result, FrameWrite& write, StageTimes& times);
   void acceptLoopClosure(std::int64_t hypothesis, bool temporal, FrameResult& result,
                          FrameWrite& write);
   // Retrieval around the hypothesis, then transfer; memory_ms is this frame's time in the
@@ -98,15 +100,22 @@ class MapImpl final : public Map {
     bool passed = false;        // the geometric check (or no check) let it through
     int inliers = 0;
     int matches = 0;        // descriptor matches behind the inliers
-    bool temporal = false;  // passed on temporal_min_inliers, near the last accepted closure
+    bool temporal = false;  // passed on temporal_max_nfa, near the last accepted closure
+    int checked = 0;        // candidates the check ran on
+    double log10_nfa = 0;   // the reported candidate's number of false alarms, log10
   };
   Verified verifyHypothesis(const FilterOutcome& outcome, const Features& features,
+                            const std::vector<std::int64_t>& word_of_feature,
                             const std::vector<LocationSimilarity>& similarities,
                             std::int64_t frame_id);
   // WM locations within temporal_radius links of the last accepted loop closure, sorted; empty
   // when temporal consistency is off or that closure is too old or from another session.
   std::vector<LocationId> nearLastClosure(std::int64_t frame_id) const;
-  GeometricView viewOf(std::int64_t location_id, const std::vector<storage::WordRef>& refs) const;
+  // The relaxed rule (temporal_*) for a candidate near the last accepted closure.
+  bool passesNearLastClosure(const GeometricResult& g) const;
+  const CachedKeypoints& keypointsOf(std::int64_t location_id);   // from the cache or the file
+  CachedKeypoints loadKeypoints(std::int64_t location_id) const;  // from the file
+  GeometricView viewOf(const CachedKeypoints& keypoints) const;
   void retrieveNeighbours(std::int64_t hypothesis, FrameWrite& write, FrameResult& result);
   // Moves LTM locations back to WM: signatures, missing words, links, ages.
   void bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write, FrameResult& result);
@@ -131,6 +140,7 @@ class MapImpl final : public Map {
   std::optional<PlaceCoder> coder_;  // absent until the map's first location
   PlaceIndex places_;                // the place code of every location, every tier
   std::optional<std::vector<std::int8_t>> frame_code_;  // the current frame's, once computed
+  KeypointCache keypoint_cache_;  // of WM locations the geometric check compared frames with
   EngineCounters counters_;
   VocabularyStateWriter vocabulary_state_;
   std::vector<std::int64_t> imported_words_;  // ascending; never leave the index

@@ -7,6 +7,7 @@
 #include <set>
 
 #include "engine/map_impl.h"
+#include "engine/option_mapping.h"
 #include "features/image_conversion.h"
 
 namespace placedb {
@@ -122,7 +123,8 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
   FilterOutcome outcome = filter_->update(tiers_->wm(), similarities, graph_);
   counters_.previous_score = filter_->state().previous_score;
   const double update_ms = msSince(stage);
-  const std::int64_t hypothesis = decideLoopClosure(outcome, features, similarities, r, w);
+  const std::int64_t hypothesis =
+      decideLoopClosure(outcome, features, q, similarities, r, w, times);
   times.filter = msSince(stage);
 
   stage = Clock::now();
@@ -188,7 +190,7 @@ void MapImpl::placeInShortTermMemory(const Features& features, const Quantised& 
       w.refs.push_back({q.word_of_feature[i], k.x, k.y, k.size, k.angle, k.response});
       kept.push_back(features.descriptors.row(static_cast<int>(i)));
     }
-    if (options_.geometry_min_inliers > 0 && features.descriptors.type() == CV_32F)
+    if (geometricCheckOn(options_) && features.descriptors.type() == CV_32F)
       w.keypoint_descriptors = encodeDescriptors(kept);
     storePlaceCode(r.location_id, features, w);
     const auto overflow = tiers_->push(r.location_id);
@@ -203,11 +205,16 @@ void MapImpl::placeInShortTermMemory(const Features& features, const Quantised& 
 }
 
 std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Features& features,
+                                        const Quantised& q,
                                         const std::vector<LocationSimilarity>& similarities,
-                                        FrameResult& r, FrameWrite& w) {
+                                        FrameResult& r, FrameWrite& w, StageTimes& times) {
   // The reported hypothesis is chosen among the filter's best and its competitors by the
   // geometric check.
-  const Verified verified = verifyHypothesis(outcome, features, similarities, r.frame_id);
+  const auto verify_start = Clock::now();
+  const Verified verified =
+      verifyHypothesis(outcome, features, q.word_of_feature, similarities, r.frame_id);
+  times.verification = msSince(verify_start);
+  r.hypothesis.candidates_checked = verified.checked;
   const std::int64_t hypothesis = verified.location;
   std::string reason;
   if (hypothesis != kNewPlace) {
@@ -215,6 +222,7 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
     r.hypothesis.posterior = filter_->posteriorOf(hypothesis);
     r.hypothesis.inliers = verified.inliers;
     r.hypothesis.matches = verified.matches;
+    r.hypothesis.log10_nfa = verified.log10_nfa;
     r.hypothesis.accepted = outcome.accepted && verified.passed;
     // EVALUATION.md: the score is 0 where a check other than the final threshold rejected it.
     const bool vetoed = !verified.passed || outcome.reason == RejectReason::kRatioTest;
@@ -223,8 +231,8 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
     if (!r.hypothesis.accepted) {
       reason = verified.passed
                    ? std::string(toString(outcome.reason))
-                   : fmt::format("geometry: {} inliers of {} matches, {} needed", verified.inliers,
-                                 verified.matches, options_.geometry_min_inliers);
+                   : fmt::format("geometry: {} inliers of {} matches, NFA 1e{:.1f}",
+                                 verified.inliers, verified.matches, verified.log10_nfa);
     }
   } else {
     reason = toString(outcome.reason);

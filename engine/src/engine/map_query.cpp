@@ -5,9 +5,9 @@
 // RAM (STM and WM), and the place codes over every location, LTM included. Each candidate goes
 // through the mapping's geometric check against its own stored keypoints, and so do the
 // locations within two links of the best one that passes; the verdict is "known"
-// when the best candidate passes it (geometry_min_inliers), "unknown" when none does. A place
-// never seen still finds look-alike candidates, but their matches do not agree on one epipolar
-// geometry, so it is reported unknown instead of as its nearest look-alike.
+// when the best candidate passes it (the mapping's geometry rule), "unknown" when none does. A
+// place never seen still finds look-alike candidates, but their matches do not agree on one
+// epipolar geometry, so it is reported unknown instead of as its nearest look-alike.
 #include <algorithm>
 #include <chrono>
 #include <map>
@@ -45,7 +45,8 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
   Features features = extractor_->extract(toGrey8(image));
   result.feature_count = features.size();
   const GeometricCheckSettings geometry = toGeometricCheckSettings(options_);
-  result.verdict = geometry.min_inliers > 0 ? QueryVerdict::kUnknown : QueryVerdict::kUnverified;
+  const bool check_on = geometricCheckOn(options_);
+  result.verdict = check_on ? QueryVerdict::kUnknown : QueryVerdict::kUnverified;
   if (features.size() == 0 || vocabulary_->size() == 0) return result;
 
   // Nearest words only: in localisation mode the vocabulary is fixed, so nothing is created.
@@ -84,18 +85,20 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
     if (!code.empty()) match.code_similarity = places_.similarity(code, id);
   }
 
-  if (geometry.min_inliers > 0) {
+  if (check_on) {
     GeometricView view;
     view.descriptors = features.descriptors;
     for (const auto& k : features.keypoints) view.points.emplace_back(k.x, k.y);
+    view.words = q.word_of_feature;
     auto check = [&](const std::vector<LocationId>& which) {
-      const auto refs = store_->loadWordRefs(which);
       for (LocationId id : which) {
-        auto it = refs.find(id);
-        if (it == refs.end()) continue;
+        // Read from the file, not the mapping's cache: a query may touch any location.
+        const CachedKeypoints keypoints = loadKeypoints(id);
+        if (keypoints.points.empty()) continue;
+        const GeometricResult g = checkGeometry(view, viewOf(keypoints), geometry);
         QueryMatch& match = candidates[id];
-        match.inliers = checkGeometry(view, viewOf(id, it->second), geometry).inliers;
-        match.verified = match.inliers >= geometry.min_inliers;
+        match.inliers = g.inliers;
+        match.verified = g.passed;
         ++result.checked;
       }
     };

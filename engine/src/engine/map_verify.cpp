@@ -2,6 +2,8 @@
 // check. The Bayes filter's best location is often a link or two away from the best-matching
 // one (its prediction smears mass along the path), so its WM neighbours compete with it.
 #include <algorithm>
+#include <cmath>
+#include <optional>
 #include <set>
 
 #include "engine/map_impl.h"
@@ -9,6 +11,9 @@
 
 namespace placedb {
 namespace {
+
+// Reported for a fit that found no model beyond its 7-pair sample.
+constexpr double kNoModel = 99.0;
 
 double similarityOf(const std::vector<LocationSimilarity>& similarities, LocationId id) {
   for (const auto& s : similarities)
@@ -22,37 +27,61 @@ std::string keypointDescriptorsKey(std::int64_t location_id) {
   return "keypoint_descriptors/" + std::to_string(location_id);
 }
 
-GeometricView MapImpl::viewOf(std::int64_t location_id,
-                              const std::vector<storage::WordRef>& refs) const {
+const CachedKeypoints& MapImpl::keypointsOf(std::int64_t location_id) {
+  if (const CachedKeypoints* hit = keypoint_cache_.find(location_id)) return *hit;
+  return keypoint_cache_.insert(location_id, loadKeypoints(location_id));
+}
+
+CachedKeypoints MapImpl::loadKeypoints(std::int64_t location_id) const {
+  CachedKeypoints entry;
+  for (const auto& ref : store_->loadWordRefs(location_id)) {
+    entry.points.emplace_back(ref.x, ref.y);
+    entry.words.push_back(ref.word_id);
+  }
+  if (auto bytes = store_->getState(keypointDescriptorsKey(location_id)))
+    entry.descriptors = std::move(*bytes);
+  return entry;
+}
+
+GeometricView MapImpl::viewOf(const CachedKeypoints& keypoints) const {
   GeometricView view;
+  view.points = keypoints.points;
+  view.words = keypoints.words;
   // The location's own descriptors when it has them (three times the matches of word
   // descriptors on lip6_outdoor); maps made before they were kept fall back to its words'.
-  if (auto bytes = store_->getState(keypointDescriptorsKey(location_id))) {
-    view.descriptors = decodeDescriptors(*bytes, vocabulary_->dim());
-    if (view.descriptors.rows == static_cast<int>(refs.size())) {
-      for (const auto& ref : refs) view.points.emplace_back(ref.x, ref.y);
-      return view;
-    }
-    view.descriptors.release();
+  if (!keypoints.descriptors.empty()) {
+    view.descriptors = decodeDescriptors(keypoints.descriptors, vocabulary_->dim());
+    if (view.descriptors.rows == static_cast<int>(keypoints.points.size())) return view;
   }
-  view.points.reserve(refs.size());
-  view.descriptors.create(static_cast<int>(refs.size()), vocabulary_->dim(), CV_32F);
+  view.points.clear();
+  view.words.clear();
+  view.descriptors.create(static_cast<int>(keypoints.points.size()), vocabulary_->dim(), CV_32F);
   int row = 0;
-  for (const auto& ref : refs) {
-    const float* d = vocabulary_->descriptor(ref.word_id);
+  for (std::size_t i = 0; i < keypoints.points.size(); ++i) {
+    const float* d = vocabulary_->descriptor(keypoints.words[i]);
     if (!d) continue;  // every STM/WM word is in RAM; skip rather than trust a gap
     std::copy(d, d + vocabulary_->dim(), view.descriptors.ptr<float>(row++));
-    view.points.emplace_back(ref.x, ref.y);
+    view.points.push_back(keypoints.points[i]);
+    view.words.push_back(keypoints.words[i]);
   }
   view.descriptors.resize(row);
   return view;
 }
 
+bool MapImpl::passesNearLastClosure(const GeometricResult& g) const {
+  const bool by_count = options_.geometry_rule != "nfa" && options_.temporal_min_inliers > 0 &&
+                        g.inliers >= options_.temporal_min_inliers;
+  const bool by_chance = options_.geometry_rule != "inliers" && options_.temporal_max_nfa > 0 &&
+                         g.log10_nfa <= std::log10(options_.temporal_max_nfa) &&
+                         g.inliers >= minimumInliers(options_.temporal_min_overlap, g.keypoints);
+  return by_count || by_chance;
+}
+
 std::vector<LocationId> MapImpl::nearLastClosure(std::int64_t frame_id) const {
-  // Without the geometric check there is no inlier count to relax.
-  if (options_.temporal_min_inliers <= 0 || options_.geometry_min_inliers <= 0 ||
-      counters_.last_closure_location == 0)
-    return {};
+  // Without the geometric check there is no chance level to relax.
+  const bool relaxed = (options_.geometry_rule != "nfa" && options_.temporal_min_inliers > 0) ||
+                       (options_.geometry_rule != "inliers" && options_.temporal_max_nfa > 0);
+  if (!relaxed || !geometricCheckOn(options_) || counters_.last_closure_location == 0) return {};
   if (counters_.last_closure_session != *session_id_ ||
       frame_id - counters_.last_closure_frame > options_.temporal_max_gap)
     return {};
@@ -67,6 +96,7 @@ std::vector<LocationId> MapImpl::nearLastClosure(std::int64_t frame_id) const {
 }
 
 MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const Features& features,
+                                            const std::vector<std::int64_t>& word_of_feature,
                                             const std::vector<LocationSimilarity>& similarities,
                                             std::int64_t frame_id) {
   Verified v;
@@ -109,7 +139,7 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
     if (seen.insert(n).second) candidates.push_back(n);
 
   const GeometricCheckSettings geometry = toGeometricCheckSettings(options_);
-  if (geometry.min_inliers <= 0) {
+  if (!geometricCheckOn(options_)) {
     // No check: the most similar candidate, the filter's own choice on ties.
     double best = -1.0;
     for (LocationId c : candidates) {
@@ -123,36 +153,54 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
     return v;
   }
 
+  // Entries of locations that left working memory go; a candidate is always in WM.
+  keypoint_cache_.retainIf(
+      [this](LocationId id) { return tiers_->contains(id) && tiers_->tierOf(id) == Tier::kWm; });
+
+  // Most likely first: the filter's choice, then by similarity. The first candidate that passes
+  // on its own ends the search; a candidate near the last closure that passes only on the
+  // relaxed chance level waits until every candidate has failed the strict one.
+  std::vector<std::pair<double, LocationId>> order;
+  for (std::size_t i = 1; i < candidates.size(); ++i)
+    order.emplace_back(-similarityOf(similarities, candidates[i]), candidates[i]);
+  std::sort(order.begin(), order.end());
+  for (std::size_t i = 1; i < candidates.size(); ++i) candidates[i] = order[i - 1].second;
+
   GeometricView query;
   query.descriptors = features.descriptors;
   query.points.reserve(features.size());
   for (const auto& k : features.keypoints) query.points.emplace_back(k.x, k.y);
-  const auto refs = store_->loadWordRefs(candidates);
-  int best = -1, best_near = -1;
+  query.words = word_of_feature;
+  std::optional<GeometricResult> best, best_near;
   LocationId near_location = kNewPlace;
-  int near_matches = 0;
   for (LocationId c : candidates) {
-    auto it = refs.find(c);
-    if (it == refs.end()) continue;
-    const GeometricResult g = checkGeometry(query, viewOf(c, it->second), geometry);
-    if (g.inliers > best) {
-      best = g.inliers;
+    const CachedKeypoints& keypoints = keypointsOf(c);
+    if (keypoints.points.empty()) continue;
+    ++v.checked;
+    const GeometricResult g = checkGeometry(query, viewOf(keypoints), geometry);
+    if (!best || strongerThan(g, *best, geometry.rule)) {
+      best = g;
       v.location = c;
-      v.matches = g.matches;
     }
-    if (g.inliers > best_near && std::binary_search(near.begin(), near.end(), c)) {
-      best_near = g.inliers;
+    if (g.passed) break;
+    if ((!best_near || strongerThan(g, *best_near, geometry.rule)) &&
+        std::binary_search(near.begin(), near.end(), c)) {
+      best_near = g;
       near_location = c;
-      near_matches = g.matches;
     }
   }
-  v.inliers = std::max(best, 0);
-  v.passed = v.inliers >= geometry.min_inliers;
-  if (!v.passed && best_near >= options_.temporal_min_inliers && near_location != kNewPlace) {
-    // Too few inliers for a place on its own, enough for one that continues the last closure.
+  if (best) {
+    v.passed = best->passed;
+    v.inliers = best->inliers;
+    v.matches = best->matches;
+    v.log10_nfa = std::min(best->log10_nfa, kNoModel);
+  }
+  if (!v.passed && best_near && passesNearLastClosure(*best_near)) {
+    // Too weak for a place on its own, not for one that continues the last closure.
     v.location = near_location;
-    v.inliers = best_near;
-    v.matches = near_matches;
+    v.inliers = best_near->inliers;
+    v.matches = best_near->matches;
+    v.log10_nfa = std::min(best_near->log10_nfa, kNoModel);
     v.passed = true;
     v.temporal = true;
   }

@@ -52,10 +52,21 @@ MemorySettings toMemorySettings(const Options& o) {
 
 GeometricCheckSettings toGeometricCheckSettings(const Options& o) {
   GeometricCheckSettings g;
+  g.rule = o.geometry_rule == "nfa"      ? GeometryRule::kNfa
+           : o.geometry_rule == "either" ? GeometryRule::kEither
+                                         : GeometryRule::kInliers;
+  g.max_nfa = o.geometry_max_nfa;
   g.min_inliers = o.geometry_min_inliers;
+  g.min_overlap = o.geometry_min_overlap;
   g.max_error_px = o.geometry_max_error_px;
   g.match_ratio = o.geometry_match_ratio;
   return g;
+}
+
+bool geometricCheckOn(const Options& o) {
+  const bool count = o.geometry_rule != "nfa" && o.geometry_min_inliers > 0;
+  const bool chance = o.geometry_rule != "inliers" && o.geometry_max_nfa > 0;
+  return count || chance;
 }
 
 }  // namespace placedb

@@ -14,5 +14,6 @@ vocab::VocabularyOptions toVocabularyOptions(const Options& options);
 BayesFilterSettings toFilterSettings(const Options& options);
 MemorySettings toMemorySettings(const Options& options);
 GeometricCheckSettings toGeometricCheckSettings(const Options& options);
+bool geometricCheckOn(const Options& options);  // geometry_min_inliers or _max_nfa not 0
 
 }  // namespace placedb

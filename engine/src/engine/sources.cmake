@@ -1,6 +1,8 @@
 target_sources(placedb_engine PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/engine_state.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/epipolar_fit.cpp
   ${CMAKE_CURRENT_LIST_DIR}/geometric_check.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/keypoint_cache.cpp
   ${CMAKE_CURRENT_LIST_DIR}/option_mapping.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_import.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_open.cpp
