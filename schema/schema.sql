@@ -1,4 +1,4 @@
--- placedb map schema: the current version (2), as one file.
+-- placedb map schema: the current version (4), as one file.
 -- It must equal the result of applying migrations/0001..N in order; a test compares
 -- sqlite_master of both. `sqlite3 new.db < schema/schema.sql` makes an empty placedb map.
 -- See schema/SCHEMA.md for the meaning of every table, column and view.
@@ -10,7 +10,8 @@ CREATE TABLE sessions (
   ended_at TEXT,                     -- NULL while running or after a crash
   clean_close INTEGER NOT NULL DEFAULT 0 CHECK (clean_close IN (0, 1)),
   software_version TEXT NOT NULL,
-  source TEXT NOT NULL
+  source TEXT NOT NULL,
+  source_digest TEXT                 -- what the source held at the start (schema 4); NULL: unknown
 );
 
 -- The settings a session ran with, as text.
