@@ -54,7 +54,15 @@ Command addMapCommand(CLI::App& parent) {
   addSettingsOptions(*app, request->settings);
   app->add_option("--stop-after", *stop_after,
                   "process at most N frames, then close; the next `map` resumes")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Validator(
+          [](std::string& value) {
+            try {
+              if (std::stoll(value) >= 1) return std::string();
+            } catch (const std::exception&) {
+            }
+            return "must be a whole number >= 1, got " + value;
+          },
+          "N >= 1"));
   app->add_flag("--new-session", request->new_session,
                 "start a new session even if the last one over SOURCE is unfinished");
   app->add_flag("--quiet,-q", request->quiet, "no progress output");
