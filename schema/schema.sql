@@ -212,5 +212,5 @@ FROM kd_nodes GROUP BY tree;
 
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 3;
+PRAGMA user_version = 4;
 COMMIT;

@@ -8,6 +8,7 @@
 
 #include "engine_fixture.h"
 #include "legacy_split_log.h"
+#include "placedb/storage/map_store.h"
 #include "vocabulary/vocabulary.h"
 
 namespace placedb::testing {
@@ -175,6 +176,7 @@ void downgradeToSchemaTwo(const std::string& path) {
   sqlite3_finalize(st);
   exec("DROP VIEW v_kd_trees");
   exec("DROP TABLE kd_nodes");
+  exec("ALTER TABLE sessions DROP COLUMN source_digest");  // schema 4
   exec("PRAGMA user_version = 2");
   exec("COMMIT");
   sqlite3_close(db);
@@ -199,7 +201,7 @@ TEST_P(ResumeTest, SchemaTwoMapConvertsAndResumes) {
   };
   // Converted at the stop after 30 frames, stopped again after 60.
   auto once = run("converted_once_" + std::to_string(GetParam()), options, 30, true, converter(1));
-  EXPECT_EQ(sqlCount(map_path, "PRAGMA user_version"), 3);
+  EXPECT_EQ(sqlCount(map_path, "PRAGMA user_version"), storage::MapStore::currentSchemaVersion());
   EXPECT_EQ(
       sqlCount(map_path, "SELECT count(*) FROM engine_state WHERE key LIKE 'vocabulary.splits%'"),
       0);
