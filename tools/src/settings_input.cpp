@@ -30,6 +30,8 @@ Settings parseJsonConfig(const std::string& content, const std::string& name) {
     throw Error(ErrorCode::kInvalidArgument, fmt::format("config {}: not a JSON object", name));
   Settings settings;
   for (const auto& [key, value] : doc.items()) {
+    if (trim(key).empty())
+      throw Error(ErrorCode::kInvalidArgument, fmt::format("config {}: empty key", name));
     if (value.is_string())
       settings[key] = value.get<std::string>();
     else if (value.is_number() || value.is_boolean())
