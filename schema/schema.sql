@@ -1,4 +1,4 @@
--- placedb map schema: the current version (5), as one file.
+-- placedb map schema: the current version (6), as one file.
 -- It must equal the result of applying migrations/0001..N in order; a test compares
 -- sqlite_master of both. `sqlite3 new.db < schema/schema.sql` makes an empty placedb map.
 -- See schema/SCHEMA.md for the meaning of every table, column and view.
@@ -10,7 +10,8 @@ CREATE TABLE sessions (
   ended_at TEXT,                     -- NULL while running or after a crash
   clean_close INTEGER NOT NULL DEFAULT 0 CHECK (clean_close IN (0, 1)),
   software_version TEXT NOT NULL,
-  source TEXT NOT NULL
+  source TEXT NOT NULL,
+  source_digest TEXT                 -- what the source held at the start (schema 6); NULL: unknown
 );
 
 -- The settings a session ran with, as text.
@@ -226,5 +227,5 @@ CREATE TABLE wm_entries (
 
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 5;
+PRAGMA user_version = 6;
 COMMIT;

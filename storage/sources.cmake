@@ -13,6 +13,7 @@ add_custom_command(
 target_sources(placedb_storage PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/database.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_file_check.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/map_files.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/migrations.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_store.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_store_memory.cpp

@@ -18,6 +18,7 @@
 #include "features/image_conversion.h"
 #include "image_source.h"  // the CLI's list-file reader: same rules as `placedb map`
 #include "placedb/map.h"
+#include "placedb/storage/map_files.h"
 
 namespace fs = std::filesystem;
 using placedb::FrameResult;
@@ -126,11 +127,7 @@ int main(int argc, char** argv) {
     resume_at = std::min(resume_at, frames.size());
     fs::create_directories(log_dir);
     const fs::path straight_map = log_dir / "straight.placedb", split_map = log_dir / "split.placedb";
-    for (const auto& p : {straight_map, split_map}) {
-      fs::remove(p);
-      fs::remove(p.string() + "-wal");
-      fs::remove(p.string() + "-shm");
-    }
+    for (const auto& p : {straight_map, split_map}) placedb::storage::removeMap(p.string());
     std::vector<Row> straight, split;
     fmt::print(stderr, "straight run over {} frames\n", frames.size());
     run(straight_map.string(), frames, options, 0, frames.size(), straight);

@@ -19,6 +19,7 @@
 #include "features/image_conversion.h"
 #include "image_source.h"  // the CLI's list-file reader: same rules as `placedb map`
 #include "placedb/map.h"
+#include "placedb/storage/map_files.h"
 
 namespace fs = std::filesystem;
 
@@ -73,9 +74,7 @@ int main(int argc, char** argv) {
   try {
     const auto options = placedb::Options::fromSettings(settings);
     const auto frames = placedb::cli::readListFile(list);
-    for (const auto& p :
-         {map_path.string(), map_path.string() + "-wal", map_path.string() + "-shm"})
-      fs::remove(p);
+    placedb::storage::removeMap(map_path.string());
     auto map = placedb::Map::open(map_path.string(), options);
     map->beginSession(list.string());
 

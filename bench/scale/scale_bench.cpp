@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "placedb/map.h"
+#include "placedb/storage/map_files.h"
 #include "placedb/storage/map_store.h"
 #include "synthetic/synthetic_sequence.h"
 
@@ -70,17 +71,15 @@ double currentRssMiB() {
 
 std::uintmax_t mapBytes(const fs::path& map) {
   std::uintmax_t bytes = 0;
-  for (const char* suffix : {"", "-wal"}) {
+  for (const auto& file : {map.string(), placedb::storage::walFile(map.string())}) {
     std::error_code ec;
-    auto size = fs::file_size(map.string() + suffix, ec);
+    auto size = fs::file_size(file, ec);
     if (!ec) bytes += size;
   }
   return bytes;
 }
 
-void removeMap(const fs::path& map) {
-  for (const char* suffix : {"", "-wal", "-shm"}) fs::remove(map.string() + suffix);
-}
+void removeMap(const fs::path& map) { placedb::storage::removeMap(map.string()); }
 
 Flags parseFlags(int argc, char** argv) {
   Flags f;

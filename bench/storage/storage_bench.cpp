@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "placedb/storage/map_files.h"
 #include "placedb/storage/map_store.h"
 
 namespace {
@@ -51,9 +52,7 @@ int main(int argc, char** argv) {
   }
   constexpr int kDim = 64, kWordsPerFrame = 10, kRefsPerLocation = 100, kLoads = 10000;
   const auto locations = std::max<std::int64_t>(1, static_cast<std::int64_t>(100000 * scale));
-  for (const char* suffix : {"", "-wal", "-shm", "-lock"}) {
-    std::filesystem::remove(path + suffix);
-  }
+  placedb::storage::removeMap(path);
 
   std::mt19937_64 random(42);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
@@ -144,7 +143,7 @@ int main(int argc, char** argv) {
   const auto bytes = std::filesystem::file_size(path);
   std::printf("file size         %.1f MB (%s)\n", bytes / 1e6, path.c_str());
   if (!keep) {
-    for (const char* suffix : {"", "-wal", "-shm", "-lock"}) std::filesystem::remove(path + suffix);
+    placedb::storage::removeMap(path);
   }
   return 0;
 }

@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <limits>
 
+#include "placedb/storage/map_files.h"
+
 namespace placedb::storage {
 
 ErrorCode errorCodeForSqlite(int sqlite_code) noexcept {
@@ -46,7 +48,7 @@ bool outOfRoom(const char* map_file) {
     return true;
   rlimit limit{};
   if (getrlimit(RLIMIT_FSIZE, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY) return false;
-  for (const std::string& file : {map.string(), map.string() + "-wal", map.string() + "-journal"}) {
+  for (const std::string& file : mapFiles(map.string())) {
     std::error_code error;
     const auto size = std::filesystem::file_size(file, error);
     if (!error && size + kSlack >= limit.rlim_cur) return true;

@@ -7,6 +7,10 @@
 #include <filesystem>
 #include <vector>
 
+#include <sys/stat.h>
+
+#include "migrations_apply.h"
+#include "placedb/storage/map_files.h"
 #include "placedb/storage/migrations.h"
 
 namespace placedb::storage::detail {
@@ -70,6 +74,27 @@ std::string hex32(std::int32_t value) {
 
 }  // namespace
 
+std::string resolveMapPath(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const auto link = fs::symlink_status(path, error);
+  if (fs::is_symlink(link)) {
+    const fs::path target = fs::canonical(path, error);
+    if (error)
+      throw StorageError(ErrorCode::kIo, "map " + path +
+                                             " is a symbolic link to a missing file: give the "
+                                             "path of the map itself");
+    return resolveMapPath(target.string());
+  }
+  if (!fs::exists(link)) return path;
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode) && st.st_nlink > 1)
+    refuse(path, "the file has " + std::to_string(st.st_nlink) +
+                     " hard links; SQLite keeps its write-ahead log and placedb its lock under "
+                     "each name, so a map must have only one (remove the other links)");
+  return path;
+}
+
 FileState checkRawFile(const std::string& path) {
   std::error_code error;
   const auto status = std::filesystem::status(path, error);
@@ -99,7 +124,7 @@ FileState checkRawFile(const std::string& path) {
   // A checkpoint stopped by a full disk or a file-size limit can leave a partial last page in
   // the main file; the intact write-ahead log still holds every committed page, and SQLite's
   // next checkpoint squares the file. So with a non-empty -wal the file is SQLite's to judge.
-  const auto wal_size = std::filesystem::file_size(path + "-wal", error);
+  const auto wal_size = std::filesystem::file_size(walFile(path), error);
   const bool has_wal = !error && wal_size > 0;
   if (size % page_size != 0 && !has_wal) {
     refuse(path, "truncated or damaged: " + std::to_string(size) +
@@ -130,7 +155,7 @@ std::unique_ptr<Database> openReadOnly(const std::string& path) {
     const int primary = error.sqliteCode() & 0xff;
     std::error_code ignored;
     const bool can_go_immutable = (primary == SQLITE_READONLY || primary == SQLITE_CANTOPEN) &&
-                                  !std::filesystem::exists(path + "-wal", ignored);
+                                  !std::filesystem::exists(walFile(path), ignored);
     if (!can_go_immutable) throw;
   }
   db = std::make_unique<Database>(uriPath(path) + "?mode=ro&immutable=1", flags);
@@ -138,17 +163,55 @@ std::unique_ptr<Database> openReadOnly(const std::string& path) {
   return db;
 }
 
-MapIdentity inspectIdentity(const std::string& path) {
+std::unique_ptr<Database> openForInspection(const std::string& path) {
   std::error_code ignored;
-  if (std::filesystem::exists(path + "-wal", ignored)) {
-    auto db = openReadOnly(path);
-    return readIdentity(*db, path);
+  if (std::filesystem::exists(walFile(path), ignored)) return openReadOnly(path);
+  auto db = std::make_unique<Database>(uriPath(path) + "?mode=ro&immutable=1",
+                                       SQLITE_OPEN_READONLY | SQLITE_OPEN_URI);
+  db->setLabel(path);
+  return db;
+}
+
+MapIdentity inspectIdentity(const std::string& path) {
+  auto db = openForInspection(path);
+  return readIdentity(*db, path);
+}
+
+void checkSchemaObjects(Database& db, const std::string& path) {
+  // What a map of this version holds, made once by running the embedded migrations in memory.
+  static const std::vector<std::string> kExpected = [] {
+    Database blank(":memory:", SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+    applyMigrations(blank, currentSchemaVersion());
+    std::vector<std::string> names;
+    Statement list(blank.handle(),
+                   "SELECT type || ' ' || name FROM sqlite_master "
+                   "WHERE type IN ('table', 'index') AND name NOT LIKE 'sqlite_%' ORDER BY 1");
+    while (list.step()) names.push_back(list.columnText(0));
+    return names;
+  }();
+  try {
+    Statement present(db.handle(), "SELECT 1 FROM sqlite_master WHERE type || ' ' || name = ?1");
+    for (const auto& object : kExpected) {
+      present.reset();
+      present.bind(1, object);
+      if (!present.step()) refuse(path, "damaged: " + object + " is missing");
+    }
+  } catch (const StorageError& error) {
+    if (error.code() == ErrorCode::kMapRefused && error.sqliteCode() != 0)
+      refuse(path, error.sqliteMessage());
+    throw;
   }
-  // Without a -wal file the main file is complete, and immutable keeps SQLite from creating the
-  // -wal and -shm files a read-only connection would otherwise leave next to a refused file.
-  Database db(uriPath(path) + "?mode=ro&immutable=1", SQLITE_OPEN_READONLY | SQLITE_OPEN_URI);
-  db.setLabel(path);
-  return readIdentity(db, path);
+}
+
+void checkIntegrity(Database& db, const std::string& path) {
+  std::string finding;
+  try {
+    finding = db.queryText("PRAGMA quick_check(1)");
+  } catch (const StorageError& error) {
+    if (error.code() == ErrorCode::kMapRefused) refuse(path, "damaged: " + error.sqliteMessage());
+    throw;
+  }
+  if (finding != "ok") refuse(path, "damaged (SQLite's quick_check: " + finding + ")");
 }
 
 MapIdentity readIdentity(Database& db, const std::string& path) {

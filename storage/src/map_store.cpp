@@ -11,6 +11,7 @@
 #include "database.h"
 #include "map_file_check.h"
 #include "migrations_apply.h"
+#include "placedb/storage/map_files.h"
 #include "placedb/storage/migrations.h"
 #include "write_scope.h"
 
@@ -23,7 +24,7 @@ constexpr const char* kNow = "strftime('%Y-%m-%dT%H:%M:%fZ', 'now')";
 // would need an extra descriptor on it, and closing that descriptor drops the POSIX locks SQLite
 // holds on the map for other connections of this process.
 int acquireWriterLock(const std::string& path) {
-  const std::string lock_path = path + "-lock";
+  const std::string lock_path = lockFile(path);
   const int fd = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (fd < 0) {
     const int error = errno;
@@ -73,6 +74,7 @@ SessionRecord readSession(const detail::Statement& s) {
   r.clean_close = s.columnInt(3) != 0;
   r.software_version = s.columnText(4);
   r.source = s.columnText(5);
+  if (!s.isNull(6)) r.source_digest = s.columnText(6);
   return r;
 }
 
@@ -141,9 +143,10 @@ ReadSnapshot::~ReadSnapshot() {
 
 // ---- Opening ----
 
-MapStore::MapStore(const std::string& path, OpenMode mode, const OpenOptions& options)
-    : path_(path), read_only_(mode == OpenMode::kReadOnly) {
+MapStore::MapStore(const std::string& given_path, OpenMode mode, const OpenOptions& options)
+    : path_(given_path), read_only_(mode == OpenMode::kReadOnly) {
   const int current = currentSchemaVersion();
+  const std::string path = detail::resolveMapPath(given_path);
   const detail::FileState state = detail::checkRawFile(path);
   if (read_only_) {
     if (state == detail::FileState::kMissing) {
@@ -167,12 +170,18 @@ MapStore::MapStore(const std::string& path, OpenMode mode, const OpenOptions& op
     }
     db_ = detail::openReadOnly(path);
     sqlite3_busy_timeout(db_->handle(), options.busy_timeout_ms);
+    detail::checkSchemaObjects(*db_, path);
     return;
   }
 
   if (state == detail::FileState::kSqlite) {
-    // Judge through a read-only connection first, so a refused file is never written to.
-    detail::judgeIdentity(detail::inspectIdentity(path), path, current);
+    // Judge through a read-only connection first, so a refused file is never written to: its
+    // identity, then every page, since a write can spread damage that no read of this session
+    // would have met.
+    auto reader = detail::openForInspection(path);
+    const auto verdict = detail::judgeIdentity(detail::readIdentity(*reader, path), path, current);
+    if (verdict != detail::Verdict::kBlankSqlite) detail::checkIntegrity(*reader, path);
+    if (verdict == detail::Verdict::kUpToDate) detail::checkSchemaObjects(*reader, path);
   }
   lock_fd_ = acquireWriterLock(path);
   try {
@@ -192,6 +201,7 @@ MapStore::MapStore(const std::string& path, OpenMode mode, const OpenOptions& op
     // 32 MB of page cache: the word index is updated at random places every frame.
     db_->exec("PRAGMA cache_size = -32768");
     if (schemaVersion() < current) detail::applyMigrations(*db_, current);
+    detail::checkSchemaObjects(*db_, path);
     db_->exec("PRAGMA foreign_keys = ON");
   } catch (...) {
     db_.reset();
@@ -251,6 +261,15 @@ std::int64_t MapStore::beginSession(const std::string& source,
   return session_id;
 }
 
+void MapStore::setSourceDigest(std::int64_t session_id, const std::string& digest) {
+  WriteScope scope(*this);
+  auto s = db_->cached("UPDATE sessions SET source_digest = ?2 WHERE id = ?1");
+  s->bind(1, session_id);
+  s->bind(2, digest);
+  s->run();
+  scope.commit();
+}
+
 void MapStore::endSession(std::int64_t session_id, bool clean) {
   WriteScope scope(*this);
   static const std::string update =
@@ -278,7 +297,8 @@ void MapStore::reopenSession(std::int64_t session_id) {
 
 std::vector<SessionRecord> MapStore::sessions() const {
   auto s = db_->cached(
-      "SELECT id, started_at, ended_at, clean_close, software_version, source FROM sessions "
+      "SELECT id, started_at, ended_at, clean_close, software_version, source, source_digest "
+      "FROM sessions "
       "ORDER BY id");
   std::vector<SessionRecord> result;
   while (s->step()) result.push_back(readSession(*s));
@@ -287,7 +307,8 @@ std::vector<SessionRecord> MapStore::sessions() const {
 
 std::optional<SessionRecord> MapStore::lastSession() const {
   auto s = db_->cached(
-      "SELECT id, started_at, ended_at, clean_close, software_version, source FROM sessions "
+      "SELECT id, started_at, ended_at, clean_close, software_version, source, source_digest "
+      "FROM sessions "
       "ORDER BY id DESC LIMIT 1");
   if (!s->step()) return std::nullopt;
   return readSession(*s);

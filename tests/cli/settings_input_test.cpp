@@ -38,6 +38,21 @@ TEST(SettingsInput, JsonConfig) {
   EXPECT_TRUE(resolveOptions(input).upright);
 }
 
+// Found by fuzz_settings: the line form refused an empty key, the JSON form passed it on.
+TEST(SettingsInput, JsonConfigWithAnEmptyKeyIsRefusedNamingTheFile) {
+  auto dir = scratchDir("SettingsInput_json_empty_key");
+  for (const char* text : {"{\"\": -88.12}", "{\"t_loop\": 0.2, \"  \": 1}"}) {
+    std::ofstream(dir / "a.json", std::ios::trunc) << text;
+    try {
+      readConfigFile(dir / "a.json");
+      ADD_FAILURE() << text << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument) << e.what();
+      EXPECT_NE(std::string(e.what()).find("a.json"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(SettingsInput, RefusesUnknownKeysBadValuesAndMalformedInput) {
   auto code = [](const SettingsInput& input) {
     try {

@@ -12,6 +12,7 @@
 #include "engine/map_impl.h"
 #include "features/image_conversion.h"
 #include "placedb/map.h"
+#include "placedb/storage/map_files.h"
 #include "test_paths.h"
 
 namespace placedb::testing {
@@ -44,9 +45,7 @@ inline const Sequence* rtabmapSamples() {
   return cached ? &*cached : nullptr;
 }
 
-inline void removeMap(const std::filesystem::path& p) {
-  for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(p.string() + suffix);
-}
+inline void removeMap(const std::filesystem::path& p) { storage::removeMap(p.string()); }
 
 inline MapImpl& impl(Map& map) { return dynamic_cast<MapImpl&>(map); }
 

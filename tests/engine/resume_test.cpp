@@ -9,6 +9,7 @@
 #include "engine_fixture.h"
 #include "legacy_split_log.h"
 #include "placedb/storage/migrations.h"
+#include "placedb/storage/map_store.h"
 #include "vocabulary/vocabulary.h"
 
 namespace placedb::testing {
@@ -182,6 +183,7 @@ void downgradeToSchemaTwo(const std::string& path) {
   exec("DROP TABLE place_codes");  // schema 4
   exec("DROP TABLE wm_entries");
   exec("DELETE FROM engine_state WHERE key = 'place_codes.centres'");
+  exec("ALTER TABLE sessions DROP COLUMN source_digest");  // schema 6
   exec("PRAGMA user_version = 2");
   exec("COMMIT");
   sqlite3_close(db);

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "child_process.h"
+#include "placedb/storage/map_files.h"
 #include "placedb/storage/map_store.h"
 #include "test_paths.h"
 
@@ -28,10 +29,7 @@ inline std::vector<std::string> mapperArgs(const std::filesystem::path& map,
   return args;
 }
 
-inline void removeMapFiles(const std::filesystem::path& p) {
-  for (const char* suffix : {"", "-wal", "-shm", "-lock"})
-    std::filesystem::remove(p.string() + suffix);
-}
+inline void removeMapFiles(const std::filesystem::path& p) { storage::removeMap(p.string()); }
 
 inline std::string fileBytes(const std::filesystem::path& p) {
   std::ifstream in(p, std::ios::binary);

@@ -7,6 +7,7 @@
 #include "cmd_eval.h"
 #include "commands.h"
 #include "mapping_run.h"
+#include "placedb/storage/map_files.h"
 #include "synthetic/synthetic_sequence.h"
 
 namespace placedb::cli {
@@ -89,9 +90,8 @@ int runDemo(const DemoRequest& request) {
   if (ec)
     throw Error(ErrorCode::kIo, fmt::format("cannot create {}: {}", request.out, ec.message()));
   // The demo starts afresh each time: only the files it made itself are replaced.
-  for (const char* name : {"demo.placedb", "demo.placedb-wal", "demo.placedb-shm",
-                           "demo.placedb-lock", "demo.placedb-journal", "run.csv"})
-    fs::remove(out / name, ec);
+  storage::removeMap((out / "demo.placedb").string());
+  fs::remove(out / "run.csv", ec);
   fs::remove_all(out / "plots", ec);
 
   synthetic::SyntheticOptions options;

@@ -11,6 +11,7 @@
 #include "map_summary.h"
 #include "placedb/error.h"
 #include "placedb/options.h"
+#include "placedb/storage/map_files.h"
 #include "placedb/storage/map_store.h"
 
 namespace placedb::cli {
@@ -48,7 +49,14 @@ nlohmann::json inspectMap(const std::string& path) {
   storage::MapStore store(path, storage::OpenMode::kReadOnly);
   nlohmann::json info;
   info["path"] = path;
-  info["file_bytes"] = std::filesystem::file_size(path);
+  // Committed frames may still sit in the write-ahead log (while a writer has the map open, or
+  // after a crash): they count too. SQLite names the log after the file a link points to.
+  std::error_code ec;
+  const auto target = std::filesystem::canonical(path, ec);
+  const auto wal = std::filesystem::file_size(storage::walFile(target.string()), ec);
+  const std::uintmax_t wal_bytes = ec ? 0 : wal;
+  info["file_bytes"] = std::filesystem::file_size(path) + wal_bytes;
+  info["wal_bytes"] = wal_bytes;
   info["schema_version"] = store.schemaVersion();
   info["frames"] = store.frameCount();
   info["bad_frames"] = store.frameCount(storage::FrameOutcome::kBad);

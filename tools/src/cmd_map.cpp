@@ -34,10 +34,13 @@ Command addMapCommand(CLI::App& parent) {
       "MAP is created when missing. If its last session ran over the same SOURCE and did not\n"
       "reach its end (a crash, Ctrl-C or --stop-after), that session resumes with the first\n"
       "frame not yet processed; otherwise a new session starts. Frame numbers always count from\n"
-      "the start of SOURCE. Unreadable images are recorded as bad frames with a warning.\n\n"
+      "the start of SOURCE. Unreadable images are recorded as bad frames with a warning.\n"
+      "A session whose SOURCE lists other images than when it began is not resumed (exit 2;\n"
+      "--new-session maps it anew).\n\n"
       "Settings: defaults < --preset < --config < --set. A resumed session keeps its settings.\n\n"
-      "The --log CSV has one row per frame processed by this invocation (appended when the file\n"
-      "exists): frame,candidate_frames,score,accepted,time_ms, then outcome, location,\n"
+      "The --log CSV has one row per frame processed by this invocation; an existing log is\n"
+      "appended to only by a resume of the session that wrote it (another run is exit 2):\n"
+      "frame,candidate_frames,score,accepted,time_ms, then outcome, location,\n"
       "posterior, words_created, vocabulary_size, wm_size, stm_size, mean_quantisation_error,\n"
       "feature_count, transferred, retrieved, per-stage times (features_ms ... storage_ms),\n"
       "session, other_candidates, rejected_reason, raw_score, inliers, matches,\n"
@@ -57,7 +60,15 @@ Command addMapCommand(CLI::App& parent) {
   addSettingsOptions(*app, request->settings);
   app->add_option("--stop-after", *stop_after,
                   "process at most N frames, then close; the next `map` resumes")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Validator(
+          [](std::string& value) {
+            try {
+              if (std::stoll(value) >= 1) return std::string();
+            } catch (const std::exception&) {
+            }
+            return "must be a whole number >= 1, got " + value;
+          },
+          "N >= 1"));
   app->add_flag("--new-session", request->new_session,
                 "start a new session even if the last one over SOURCE is unfinished");
   app->add_flag("--quiet,-q", request->quiet, "no progress output");

@@ -60,7 +60,18 @@ int runQuery(const QueryRequest& request) {
       out.push_back({{"image", image_path}, {"error", problem}});
       continue;
     }
-    QueryResult result = map->query(image, request.top);
+    QueryResult result;
+    try {
+      result = map->query(image, request.top);
+    } catch (const Error& e) {
+      // An image the extractor cannot use (too small, too large) is this image's failure only;
+      // anything else (the map, the disk) ends the command.
+      if (e.code() != ErrorCode::kInvalidArgument) throw;
+      printError(fmt::format("cannot use image {}: {}", image_path, e.what()));
+      status = exitCodeFor(ErrorCode::kIo);
+      out.push_back({{"image", image_path}, {"error", e.what()}});
+      continue;
+    }
     if (request.json) {
       nlohmann::json matches = nlohmann::json::array();
       for (const auto& m : result.matches)
@@ -117,7 +128,8 @@ Command addQueryCommand(CLI::App& parent) {
       "Prints the best locations (verified first, by inliers), their tier, the frames they\n"
       "cover and how many locations were searched. The map is opened read-only with the\n"
       "settings of its last session.\n"
-      "Exit status 3 when an image cannot be read (the others are still answered).\n\n"
+      "Exit status 3 when an image cannot be read or used (a folder, not an image, too small\n"
+      "or too large): it gets one error line naming it, and the others are still answered.\n\n"
       "Examples:\n"
       "  placedb query run.placedb photo.jpg\n"
       "  placedb query run.placedb a.png b.png --top 3 --json");

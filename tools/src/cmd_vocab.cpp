@@ -1,12 +1,17 @@
 #include <fmt/format.h>
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 #include "commands.h"
 #include "placedb/error.h"
 #include "placedb/map.h"
+#include "placedb/storage/map_files.h"
 #include "placedb/storage/map_store.h"
 #include "vocab_transfer.h"
 #include "vocabulary/vocabulary_file.h"
@@ -65,12 +70,42 @@ vocab::VocabularyData wordsOfMap(const std::string& map_path) {
   return data;
 }
 
+// The export must not replace the map it reads, nor one of its side files, under any name.
+void refuseMapAsOutput(const std::string& map_path, const std::string& file) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path output = fs::weakly_canonical(file, ec);
+  for (const auto& part : storage::mapFiles(map_path)) {
+    std::error_code part_ec;
+    const bool same = fs::exists(part, part_ec) && fs::exists(file, part_ec)
+                          ? fs::equivalent(part, file, part_ec)
+                          : fs::weakly_canonical(part, part_ec) == output;
+    if (same && !part_ec)
+      throw Error(ErrorCode::kInvalidArgument,
+                  fmt::format("vocab export: output {} is the map {} (or one of its files): give "
+                              "another file",
+                              file, part));
+  }
+}
+
 int runExport(const VocabRequest& request) {
+  refuseMapAsOutput(request.map_path, request.file);
   vocab::VocabularyData data = wordsOfMap(request.map_path);
-  if (request.text)
-    vocab::writeVocabularyText(request.file, data);
-  else
-    vocab::writeVocabularyFile(request.file, data);
+  // A temporary file beside the output, renamed over it once complete: a failed export leaves
+  // neither a partial file nor a damaged older one.
+  const std::string partial = fmt::format("{}.partial-{}", request.file, ::getpid());
+  try {
+    if (request.text)
+      vocab::writeVocabularyText(partial, data);
+    else
+      vocab::writeVocabularyFile(partial, data);
+    if (std::rename(partial.c_str(), request.file.c_str()) != 0)
+      throw Error(ErrorCode::kIo,
+                  fmt::format("cannot write {}: {}", request.file, std::strerror(errno)));
+  } catch (...) {
+    std::remove(partial.c_str());
+    throw;
+  }
   std::fputs(fmt::format("placedb: wrote {} words ({}, dimension {}) to {}\n", data.ids.size(),
                          data.extractor, data.dim, request.file)
                  .c_str(),
@@ -105,9 +140,7 @@ int runImport(const VocabRequest& request) {
         request.mode == "fixed" ? VocabularyMode::kFixed : VocabularyMode::kSeed);
     map->close();
   } catch (...) {
-    if (created)
-      for (const char* suffix : {"", "-wal", "-shm", "-lock"})
-        std::filesystem::remove(request.map_path + suffix);
+    if (created) storage::removeMap(request.map_path);
     throw;
   }
   const std::string dimension =

@@ -26,17 +26,21 @@ int exitCodeFor(ErrorCode code) {
 std::string exitCodeTable() {
   return "Exit status:\n"
          "   0  success\n"
-         "   2  invalid argument: bad command line, unknown setting or bad value\n"
-         "   3  I/O: unreadable source, image, log or config file\n"
-         "   4  map refused: not SQLite, not a placedb map, damaged, or newer than this binary\n"
+         "   2  invalid argument: bad command line, unknown setting or bad value, an export onto\n"
+         "      the map, a --log file of another run or format\n"
+         "   3  I/O: unreadable source, image, list, log or config file (or a folder given as "
+         "one)\n"
+         "   4  map refused: not SQLite, not a placedb map, damaged pages or missing tables, "
+         "newer\n"
+         "      than this binary, or a file with more than one hard link\n"
          "   5  map busy: another writer holds the map\n"
          "   6  read-only: the map or its folder cannot be written\n"
-         "   7  disk full\n"
+         "   7  disk full (the map, the log or an export; nothing partial is left)\n"
          "   8  vocabulary file refused (magic, version, dimension, checksum, extractor)\n"
          "   9  other storage (SQLite) failure\n"
          "  10  internal error (a bug: please report it)\n"
-         "Ctrl-C during `map` finishes the current frame, closes the map cleanly (resumable) and\n"
-         "exits 0.\n";
+         "Ctrl-C, SIGTERM or SIGHUP during `map` finishes the current frame, closes the map\n"
+         "cleanly (resumable) and exits 0.\n";
 }
 
 void printError(const std::string& message) {

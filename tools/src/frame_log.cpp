@@ -2,6 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 
@@ -71,21 +77,104 @@ const std::vector<std::string>& FrameLogWriter::columns() {
   return kColumns;
 }
 
-FrameLogWriter::FrameLogWriter(const std::filesystem::path& path) : path_(path.string()) {
+namespace {
+
+std::string headerLine() {
+  std::string header;
+  for (const auto& name : FrameLogWriter::columns()) header += (header.empty() ? "" : ",") + name;
+  return header;
+}
+
+[[noreturn]] void throwWriteError(const std::string& what, int error) {
+  const bool full = error == ENOSPC || error == EFBIG || error == EDQUOT;
+  throw Error(full ? ErrorCode::kDiskFull : ErrorCode::kIo,
+              fmt::format("{}: {}", what, std::strerror(error)));
+}
+
+// Writes all of `text` or nothing: a short write is cut back to where it started.
+void writeWhole(int fd, const std::string& text, off_t good_size, const std::string& what) {
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      int error = n < 0 ? errno : ENOSPC;
+      // Shrinking needs no room; a later resume appends after the last whole row. Should the
+      // cut fail too, the write's error is still the one to report.
+      if (::ftruncate(fd, good_size) != 0) error = error == 0 ? errno : error;
+      throwWriteError(what, error);
+    }
+    done += static_cast<std::size_t>(n);
+  }
+}
+
+}  // namespace
+
+void FrameLogWriter::checkAppendable(const std::filesystem::path& path,
+                                     std::optional<std::int64_t> resumed_session) {
+  namespace fs = std::filesystem;
+  const std::string name = path.string();
   std::error_code ec;
-  bool has_content = std::filesystem::exists(path, ec) && std::filesystem::file_size(path, ec) > 0;
-  file_ = std::fopen(path_.c_str(), "a");
-  if (!file_) throw Error(ErrorCode::kIo, fmt::format("cannot write log {}", path_));
-  if (!has_content) {
-    std::string header;
-    for (const auto& name : columns()) header += (header.empty() ? "" : ",") + name;
-    std::fputs((header + "\n").c_str(), file_);
-    std::fflush(file_);
+  const auto status = fs::status(path, ec);
+  if (!fs::exists(status)) {
+    const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+    if (!fs::is_directory(folder, ec))
+      throw Error(ErrorCode::kIo, fmt::format("cannot write log {}: folder {} does not exist", name,
+                                              folder.string()));
+    if (::access(folder.c_str(), W_OK) != 0)
+      throw Error(ErrorCode::kIo, fmt::format("cannot write log {}: folder {}: {}", name,
+                                              folder.string(), std::strerror(errno)));
+    return;
+  }
+  if (!fs::is_regular_file(status))
+    throw Error(ErrorCode::kIo, fmt::format("cannot write log {}: not a regular file", name));
+  if (::access(name.c_str(), W_OK) != 0)
+    throw Error(ErrorCode::kIo, fmt::format("cannot write log {}: {}", name, std::strerror(errno)));
+  if (fs::file_size(path, ec) == 0) return;
+  const CsvTable existing = readCsv(path);
+  if (existing.header != splitCsvLine(headerLine()))
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("log {} exists with other columns (not a log of this placedb): "
+                            "give a new file",
+                            name));
+  if (existing.rows.empty()) return;
+  const std::string& last = existing.cell(existing.rows.size() - 1, existing.column("session"));
+  if (!resumed_session || last != std::to_string(*resumed_session))
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("log {} holds the rows of session {}; this run {}: give a new file "
+                            "(appending would mix two runs)",
+                            name, last,
+                            resumed_session ? fmt::format("resumes session {}", *resumed_session)
+                                            : std::string("starts a new session")));
+}
+
+FrameLogWriter::FrameLogWriter(const std::filesystem::path& path) : path_(path.string()) {
+  fd_ = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  if (fd_ < 0)
+    throw Error(ErrorCode::kIo,
+                fmt::format("cannot write log {}: {}", path_, std::strerror(errno)));
+  struct stat st {};
+  if (::fstat(fd_, &st) != 0) {
+    const int error = errno;
+    ::close(fd_);
+    throw Error(ErrorCode::kIo,
+                fmt::format("cannot write log {}: {}", path_, std::strerror(error)));
+  }
+  size_ = st.st_size;
+  if (size_ == 0) {
+    const std::string header = headerLine() + "\n";
+    try {
+      writeWhole(fd_, header, 0, "cannot write log " + path_);
+    } catch (...) {
+      ::close(fd_);
+      throw;
+    }
+    size_ += static_cast<off_t>(header.size());
   }
 }
 
 FrameLogWriter::~FrameLogWriter() {
-  if (file_) std::fclose(file_);
+  if (fd_ >= 0) ::close(fd_);
 }
 
 void FrameLogWriter::write(const FrameResult& r) {
@@ -135,8 +224,8 @@ void FrameLogWriter::write(const FrameResult& r) {
   std::string row;
   for (const auto& field : fields) row += (row.empty() ? "" : ",") + field;
   row += "\n";
-  if (std::fputs(row.c_str(), file_) < 0 || std::fflush(file_) != 0)
-    throw Error(ErrorCode::kIo, fmt::format("cannot write log {}", path_));
+  writeWhole(fd_, row, size_, "cannot write log " + path_);
+  size_ += static_cast<off_t>(row.size());
 }
 
 int CsvTable::column(const std::string& name) const {

@@ -13,6 +13,7 @@
 // candidate_frames holds the source indices of the hypothesis' frames from this session only:
 // frames of earlier sessions are not indices of this source, so they go to other_candidates as
 // "session:index" pairs.
+#include <sys/types.h>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -29,17 +30,26 @@ class FrameLogWriter {
   // Appends to an existing non-empty log (no second header); creates it otherwise.
   // Throws placedb::Error(kIo) when it cannot be opened.
   explicit FrameLogWriter(const std::filesystem::path& path);
+  // Whether a run may write to the log at `path`, checked before the run writes anything: its
+  // folder must exist and be writable, and an existing log must have these columns and end
+  // with rows of `resumed_session` (the session this run continues; nullopt for a new one), so
+  // one log never mixes two runs. Throws placedb::Error: kIo (cannot write), kInvalidArgument.
+  static void checkAppendable(const std::filesystem::path& path,
+                              std::optional<std::int64_t> resumed_session);
   ~FrameLogWriter();
   FrameLogWriter(const FrameLogWriter&) = delete;
   FrameLogWriter& operator=(const FrameLogWriter&) = delete;
 
-  void write(const FrameResult& result);  // flushed, so a killed run keeps its rows
+  // One write() per row, so a killed run keeps its rows. A row the disk has no room for is
+  // cut back off (kDiskFull), so the log never holds a partial row.
+  void write(const FrameResult& result);
 
   static const std::vector<std::string>& columns();
 
  private:
-  std::FILE* file_ = nullptr;
+  int fd_ = -1;
   std::string path_;
+  off_t size_ = 0;  // bytes of whole rows
 };
 
 // A CSV table with a header row; fields may be quoted ("a, b" and "" escapes).

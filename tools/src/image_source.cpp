@@ -4,13 +4,16 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
 #include "features/image_conversion.h"
 #include "placedb/error.h"
+#include "text_file.h"
 
 namespace placedb::cli {
 namespace fs = std::filesystem;
@@ -58,6 +61,14 @@ class PathListSource : public ImageSource {
     return true;
   }
   std::vector<std::string> skippedFiles() const override { return skipped_; }
+  std::string digest() const override {
+    std::uint64_t hash = 14695981039346656037ull;  // FNV-1a 64
+    for (const auto& path : paths_) {
+      for (unsigned char c : path) hash = (hash ^ c) * 1099511628211ull;
+      hash = (hash ^ 0u) * 1099511628211ull;  // the end of a path counts too
+    }
+    return fmt::format("paths:{}:{:016x}", paths_.size(), hash);
+  }
 
  private:
   std::string canonical_, kind_;
@@ -65,10 +76,24 @@ class PathListSource : public ImageSource {
   std::int64_t next_ = 0;
 };
 
+// FFmpeg and OpenCV print their own lines about a file they cannot read (ten for a broken MP4,
+// also under --quiet); placedb's error names the file instead. OPENCV_FFMPEG_LOGLEVEL set by the
+// user is kept, for debugging a video.
+void quietVideoLibraries() {
+  static const bool done = [] {
+    ::setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0);  // AV_LOG_QUIET
+    cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
+    return true;
+  }();
+  (void)done;
+}
+
 class VideoSource : public ImageSource {
  public:
   explicit VideoSource(std::string canonical) : canonical_(std::move(canonical)) {
-    if (!capture_.open(canonical_))
+    quietVideoLibraries();
+    // FFmpeg only: the GStreamer fallback adds nothing for files and prints an assertion.
+    if (!capture_.open(canonical_, cv::CAP_FFMPEG))
       throw Error(ErrorCode::kIo, fmt::format("cannot open video {}", canonical_));
     double count = capture_.get(cv::CAP_PROP_FRAME_COUNT);
     if (count > 0) count_ = static_cast<std::int64_t>(count);
@@ -76,6 +101,11 @@ class VideoSource : public ImageSource {
   const std::string& canonicalPath() const override { return canonical_; }
   std::string kind() const override { return "video"; }
   std::optional<std::int64_t> size() const override { return count_; }
+  std::string digest() const override {
+    std::error_code ec;
+    const auto bytes = fs::file_size(canonical_, ec);
+    return ec ? std::string() : fmt::format("bytes:{}", bytes);
+  }
   void seek(std::int64_t index) override {
     // Seeking by timestamp is inexact in many containers: grab frame by frame instead.
     while (next_ < index && capture_.grab()) ++next_;
@@ -145,9 +175,7 @@ bool hasVideoExtension(const fs::path& path) {
 }
 
 std::vector<std::string> readListFile(const fs::path& list_file) {
-  std::ifstream in(list_file, std::ios::binary);
-  if (!in) throw Error(ErrorCode::kIo, fmt::format("cannot read list file {}", list_file.string()));
-  std::string content((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string content = readTextFile(list_file, "list file");
   if (content.find('\0') != std::string::npos)
     throw Error(ErrorCode::kIo,
                 fmt::format("{} is neither an image folder, a list file nor a known video format",
@@ -189,13 +217,25 @@ void listImageFolder(const fs::path& folder, std::vector<std::string>& images,
 }
 
 cv::Mat readImageFile(const std::string& path, std::string& problem) {
+  // A folder opens like a file but throws on the first read.
+  std::error_code ec;
+  const auto status = fs::status(path, ec);
+  if (fs::exists(status) && !fs::is_regular_file(status)) {
+    problem = fs::is_directory(status) ? "a folder, not an image file" : "not a regular file";
+    return {};
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     problem = "cannot open file";
     return {};
   }
-  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
-                                   std::istreambuf_iterator<char>());
+  std::vector<unsigned char> bytes;
+  try {
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  } catch (const std::ios_base::failure& e) {
+    problem = fmt::format("cannot read: {}", e.what());
+    return {};
+  }
   if (bytes.empty()) {
     problem = "empty file";
     return {};
@@ -246,7 +286,10 @@ std::unique_ptr<ImageSource> ImageSource::open(const std::string& source) {
     throw Error(ErrorCode::kIo, fmt::format("source {} is a single image: give its folder or a "
                                             "list file",
                                             source));
-  return std::make_unique<PathListSource>(resolved, "list", readListFile(resolved),
+  std::vector<std::string> paths = readListFile(resolved);
+  if (paths.empty())
+    throw Error(ErrorCode::kIo, fmt::format("list file {} holds no image path", source));
+  return std::make_unique<PathListSource>(resolved, "list", std::move(paths),
                                           std::vector<std::string>{});
 }
 

@@ -43,6 +43,9 @@ class ImageSource {
   virtual bool read(SourceFrame& frame) = 0;
   // Folder entries that are not images, skipped.
   virtual std::vector<std::string> skippedFiles() const { return {}; }
+  // What the source holds, short: "paths:N:HASH" (FNV-1a 64 of the image paths in order) for a
+  // folder or list, "bytes:N" for a video. Stored with a session; a resume checks it.
+  virtual std::string digest() const = 0;
 };
 
 // Natural order: digit runs compare as numbers ("img2" < "img10"), the rest byte by byte.

@@ -20,6 +20,7 @@ void installInterruptHandlers() {
   action.sa_flags = 0;  // no SA_RESTART: a blocking read returns and the loop sees the flag
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
+  sigaction(SIGHUP, &action, nullptr);  // a closed terminal or ssh session
 }
 
 bool interruptRequested() { return g_interrupted.load(); }

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <csignal>
 #include <cstdio>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -64,6 +65,9 @@ int run(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   using placedb::cli::printError;
+  // A write past a file-size limit (ulimit -f) then fails with EFBIG and is reported as a full
+  // disk, instead of killing the process in the middle of a file.
+  std::signal(SIGXFSZ, SIG_IGN);
   try {
     return run(argc, argv);
   } catch (const placedb::Error& e) {

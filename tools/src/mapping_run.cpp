@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <map>
 #include <memory>
 
 #include "exit_codes.h"
@@ -11,6 +12,7 @@
 #include "image_source.h"
 #include "interrupt.h"
 #include "placedb/map.h"
+#include "placedb/storage/map_store.h"
 #include "progress.h"
 
 namespace placedb::cli {
@@ -22,18 +24,72 @@ bool sameSource(const std::string& stored, const std::string& canonical) {
   return (ec ? std::filesystem::path(stored) : resolved).string() == canonical;
 }
 
-// The session to continue, if any (see the resume rule in mapping_run.h).
-std::optional<SessionInfo> sessionToResume(const Map& map, const ImageSource& source,
-                                           bool new_session) {
-  if (new_session) return std::nullopt;
+// Where a resumed session continues, and the settings it keeps.
+struct ResumePoint {
+  std::int64_t session_id = 0;
+  std::int64_t first_index = 0;
+  std::map<std::string, std::string> settings;
+};
+
+// The resume rule of mapping_run.h for the map's last session.
+std::optional<std::int64_t> resumeIndex(const storage::SessionRecord& last,
+                                        std::optional<std::int64_t> last_index,
+                                        const ImageSource& source) {
+  if (!sameSource(last.source, source.canonicalPath())) return std::nullopt;
+  const std::int64_t next = last_index ? *last_index + 1 : 0;
+  if (last.clean_close) {
+    // A source of unknown length cannot tell whether it was finished: treat it as finished.
+    auto size = source.size();
+    if (!size || next >= *size) return std::nullopt;
+  }
+  return next;
+}
+
+// The session to continue, if any, read before the map is opened for writing: a resumed session
+// is opened with its own stored settings, and everything about the run is checked before anything
+// is written. `known` is false when the map cannot be read this way (an older schema, upgraded by
+// the read-write open; or a refused file, which Map::open then reports).
+struct ResumeDecision {
+  bool known = true;
+  std::optional<ResumePoint> resume;
+};
+
+ResumeDecision sessionToResume(const std::string& map_path, const ImageSource& source,
+                               bool new_session) {
+  if (new_session) return {};
+  std::error_code ec;
+  if (!std::filesystem::exists(map_path, ec) || std::filesystem::file_size(map_path, ec) == 0)
+    return {};
+  try {
+    storage::MapStore store(map_path, storage::OpenMode::kReadOnly);
+    auto last = store.lastSession();
+    if (!last) return {};
+    auto next = resumeIndex(*last, store.lastFrameIndex(last->id), source);
+    if (!next) return {};
+    if (last->source_digest && !last->source_digest->empty() &&
+        *last->source_digest != source.digest())
+      throw Error(ErrorCode::kInvalidArgument,
+                  fmt::format("cannot resume session {} of {}: {} changed since the session "
+                              "began (its images differ: {} then, {} now), so frame {} would be "
+                              "another image; use --new-session to map it as a new session",
+                              last->id, map_path, source.canonicalPath(), *last->source_digest,
+                              source.digest(), *next));
+    return {true, ResumePoint{last->id, *next, store.settings(last->id)}};
+  } catch (const storage::StorageError&) {
+    return {false, std::nullopt};
+  }
+}
+
+// The same decision on the open map, for maps the read-only look could not read.
+std::optional<ResumePoint> sessionToResume(const Map& map, const ImageSource& source) {
   auto last = map.lastSession();
-  if (!last || !sameSource(last->source, source.canonicalPath())) return std::nullopt;
-  if (!last->clean_close) return last;
-  std::int64_t next = last->last_source_index ? *last->last_source_index + 1 : 0;
-  // A source of unknown length cannot tell whether it was finished: treat it as finished.
-  auto size = source.size();
-  if (size && next < *size) return last;
-  return std::nullopt;
+  if (!last) return std::nullopt;
+  storage::SessionRecord record;
+  record.source = last->source;
+  record.clean_close = last->clean_close;
+  auto next = resumeIndex(record, last->last_source_index, source);
+  if (!next) return std::nullopt;
+  return ResumePoint{last->id, *next, {}};
 }
 
 }  // namespace
@@ -45,25 +101,41 @@ MappingSummary runMapping(const MappingRequest& request) {
   // Everything that can be refused is checked before the map file is touched.
   auto source = ImageSource::open(request.source);
   Options options = resolveOptions(request.settings);
+  const ResumeDecision decision = sessionToResume(request.map_path, *source, request.new_session);
+  std::optional<ResumePoint> resume = decision.resume;
+  if (resume) {
+    // The session continues with the settings it started with, so its results stay exact.
+    options = Options::fromSettings(resume->settings);
+    if (!request.settings.empty())
+      printWarning(
+          fmt::format("resuming session {}: it keeps the settings it started with; "
+                      "--preset/--config/--set are ignored (use --new-session to change "
+                      "them)",
+                      resume->session_id));
+  }
+  auto checkLog = [&] {
+    if (!request.log_path.empty())
+      FrameLogWriter::checkAppendable(request.log_path,
+                                      resume ? std::optional(resume->session_id) : std::nullopt);
+  };
+  if (decision.known) checkLog();
   for (const auto& skipped : source->skippedFiles())
     printWarning(fmt::format("skipping {}: not an image file", skipped));
   std::unique_ptr<FrameLogWriter> log;
 
   auto map = Map::open(request.map_path, options, Map::Mode::kMapping);
   MappingSummary summary;
-  if (auto resume = sessionToResume(*map, *source, request.new_session)) {
-    summary.first_index = resume->last_source_index ? *resume->last_source_index + 1 : 0;
-    if (!request.settings.empty())
-      printWarning(
-          fmt::format("resuming session {}: it keeps the settings it started with; "
-                      "--preset/--config/--set are ignored (use --new-session to change "
-                      "them)",
-                      resume->id));
-    summary.session_id = map->resumeSession(resume->id).id;
+  if (!decision.known && !request.new_session) {
+    resume = sessionToResume(*map, *source);
+    checkLog();
+  }
+  if (resume) {
+    summary.first_index = resume->first_index;
+    summary.session_id = map->resumeSession(resume->session_id).id;
     summary.resumed = true;
     source->seek(summary.first_index);
   } else {
-    summary.session_id = map->beginSession(source->canonicalPath()).id;
+    summary.session_id = map->beginSession(source->canonicalPath(), source->digest()).id;
   }
   if (!request.log_path.empty()) log = std::make_unique<FrameLogWriter>(request.log_path);
   if (!request.quiet)

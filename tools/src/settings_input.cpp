@@ -3,11 +3,10 @@
 #include <fmt/format.h>
 
 #include <cctype>
-#include <fstream>
-#include <iterator>
 #include <nlohmann/json.hpp>
 
 #include "placedb/error.h"
+#include "text_file.h"
 
 namespace placedb::cli {
 namespace {
@@ -31,6 +30,8 @@ Settings parseJsonConfig(const std::string& content, const std::string& name) {
     throw Error(ErrorCode::kInvalidArgument, fmt::format("config {}: not a JSON object", name));
   Settings settings;
   for (const auto& [key, value] : doc.items()) {
+    if (trim(key).empty())
+      throw Error(ErrorCode::kInvalidArgument, fmt::format("config {}: empty key", name));
     if (value.is_string())
       settings[key] = value.get<std::string>();
     else if (value.is_number() || value.is_boolean())
@@ -81,13 +82,15 @@ Settings parseAssignments(const std::vector<std::string>& assignments) {
   return settings;
 }
 
-Settings readConfigFile(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(ErrorCode::kIo, fmt::format("cannot read config file {}", path.string()));
-  std::string content((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+Settings parseConfig(const std::string& text, const std::string& name) {
+  const std::string content = withoutByteOrderMark(text);
   std::string head = trim(content);
-  if (!head.empty() && head[0] == '{') return parseJsonConfig(content, path.string());
-  return parseLineConfig(content, path.string());
+  if (!head.empty() && head[0] == '{') return parseJsonConfig(content, name);
+  return parseLineConfig(content, name);
+}
+
+Settings readConfigFile(const std::filesystem::path& path) {
+  return parseConfig(readTextFile(path, "config file"), path.string());
 }
 
 Options presetOptions(const std::string& preset) {

@@ -28,6 +28,9 @@ struct SettingsInput {
 Settings parseAssignments(const std::vector<std::string>& assignments);
 // Throws placedb::Error(kIo) when unreadable, kInvalidArgument when malformed.
 Settings readConfigFile(const std::filesystem::path& path);
+// The settings of a config file's content; `name` (the file) is named in every error.
+// Throws placedb::Error(kInvalidArgument) when malformed.
+Settings parseConfig(const std::string& content, const std::string& name);
 Options presetOptions(const std::string& preset);
 Options resolveOptions(const SettingsInput& input);
 // The catalogue as a help text: key, default, valid values, description; then the aliases.

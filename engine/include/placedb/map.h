@@ -73,6 +73,7 @@ struct SessionInfo {
   std::string source;
   std::string started_at, ended_at;   // ISO 8601 UTC; ended_at empty while open or after a crash
   bool clean_close = false;
+  std::string source_digest;  // as given to beginSession; empty when none was
   std::int64_t frames = 0;
   std::optional<std::int64_t> last_source_index;  // of the last committed frame
 };
@@ -125,8 +126,10 @@ class Map {
   virtual std::map<std::string, std::string> sessionSettings(std::int64_t session_id) const = 0;
 
   // Mapping: starts a new session over `source`, or continues an interrupted one with the
-  // settings it was started with.
-  virtual SessionInfo beginSession(const std::string& source) = 0;
+  // settings it was started with. `source_digest`, when given, is stored with the session so
+  // that a caller can tell later whether the source still holds what it held.
+  virtual SessionInfo beginSession(const std::string& source,
+                                   const std::string& source_digest = "") = 0;
   virtual SessionInfo resumeSession(std::int64_t session_id) = 0;
 
   // One frame: features, quantisation, STM, filter, memory management, one committed

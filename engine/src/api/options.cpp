@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <functional>
 #include <limits>
@@ -141,7 +142,9 @@ const std::vector<Row>& table() {
               "back before the filter runs, 0 = off"),
       integer("wm_immune_newest", &Options::wm_immune_newest, 0, 100000, "0..100000",
               "newest WM locations never transferred (at least)"),
-      real("wm_recent_ratio", &Options::wm_recent_ratio, 0, 1, "0..1",
+      // 1 would make all of WM immune: memory management could never transfer a location.
+      real("wm_recent_ratio", &Options::wm_recent_ratio, 0, std::nextafter(1.0, 0.0),
+           "0 <= x < 1",
            "share of WM, the newest, never transferred (RTAB-Map's Mem/RecentWmRatio)"),
       real("t_loop", &Options::t_loop, 0, 1, "0..1", "loop-closure acceptance threshold"),
       choice("decision_rule", &Options::decision_rule, {"rtabmap", "paper"}, "rtabmap|paper",

@@ -40,7 +40,8 @@ class MapImpl final : public Map {
   std::optional<SessionInfo> lastSession() const override;
   std::vector<SessionInfo> sessions() const override;
   std::map<std::string, std::string> sessionSettings(std::int64_t session_id) const override;
-  SessionInfo beginSession(const std::string& source) override;
+  SessionInfo beginSession(const std::string& source,
+                           const std::string& source_digest = "") override;
   SessionInfo resumeSession(std::int64_t session_id) override;
   FrameResult process(const cv::Mat& image, std::int64_t source_index,
                       const std::string& source_path) override;

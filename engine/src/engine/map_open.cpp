@@ -10,8 +10,23 @@
 #include "placedb/version.h"
 
 namespace placedb {
+namespace {
+
+// The components check their own settings in their constructors; building them once before the
+// map file is touched means a setting they refuse never creates or changes a file.
+void checkComponentSettings(const Options& options) {
+  auto extractor = makeFeatureExtractor(toFeatureOptions(options));
+  vocab::Vocabulary vocabulary(toVocabularyOptions(options), extractor->dim(),
+                               extractor->signature());
+  BayesFilter filter(toFilterSettings(options));
+  MemoryTiers tiers(toMemorySettings(options));
+}
+
+}  // namespace
+
 std::unique_ptr<Map> Map::open(const std::string& path, const Options& options, Mode mode) {
   options.validate();
+  checkComponentSettings(options);
   return std::make_unique<MapImpl>(path, options, mode);
 }
 
@@ -174,6 +189,7 @@ SessionInfo MapImpl::toInfo(const storage::SessionRecord& record) const {
   info.started_at = record.started_at;
   info.ended_at = record.ended_at.value_or("");
   info.clean_close = record.clean_close;
+  info.source_digest = record.source_digest.value_or("");
   info.frames = store_->frameCount(record.id);
   info.last_source_index = store_->lastFrameIndex(record.id);
   return info;
@@ -195,7 +211,7 @@ std::map<std::string, std::string> MapImpl::sessionSettings(std::int64_t session
   return store_->settings(session_id);
 }
 
-SessionInfo MapImpl::beginSession(const std::string& source) {
+SessionInfo MapImpl::beginSession(const std::string& source, const std::string& source_digest) {
   requireWritable("beginSession");
   if (session_id_) close();
   closed_ = false;
@@ -203,6 +219,7 @@ SessionInfo MapImpl::beginSession(const std::string& source) {
   // the previous session's STM becomes loop candidates.
   auto tx = store_->begin();
   std::int64_t id = store_->beginSession(source, options_.toSettings(), PLACEDB_VERSION_STRING);
+  if (!source_digest.empty()) store_->setSourceDigest(id, source_digest);
   if (!store_->getStateText(kMapExtractorKey))
     store_->putState(kMapExtractorKey, extractor_->signature());
   std::vector<std::int64_t> stm(tiers_->stm().begin(), tiers_->stm().end());

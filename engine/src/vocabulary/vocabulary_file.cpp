@@ -1,5 +1,6 @@
 #include "vocabulary/vocabulary_file.h"
 
+#include <algorithm>
 #include <boost/archive/archive_exception.hpp>
 #include <boost/archive/binary_iarchive.hpp>
 #include <boost/archive/binary_oarchive.hpp>
@@ -69,6 +70,32 @@ class HeaderParser {
 [[noreturn]] void refuse(const std::filesystem::path& path, const std::string& why) {
   throw Error(ErrorCode::kVocabularyRefused,
               "vocabulary file " + path.string() + " refused: " + why);
+}
+
+// A full disk or a file-size limit is kDiskFull, anything else kIo; `error` is the errno.
+[[noreturn]] void writeFailed(const std::filesystem::path& path, const char* what, int error) {
+  const bool full = error == ENOSPC || error == EFBIG || error == EDQUOT;
+  throw Error(full ? ErrorCode::kDiskFull : ErrorCode::kIo,
+              std::string(what) + " " + path.string() + ": " +
+                  (error != 0 ? std::strerror(error) : "write failed"));
+}
+
+// Words as a reader may hand them on: ids unique and >= 0, every value finite. A file can pass
+// its checksums and still break these (it was written by something else).
+void checkWords(const std::filesystem::path& path, const VocabularyData& data) {
+  std::vector<std::int64_t> ids = data.ids;
+  std::sort(ids.begin(), ids.end());
+  if (!ids.empty() && ids.front() < 0)
+    refuse(path, "negative word id " + std::to_string(ids.front()));
+  if (auto twin = std::adjacent_find(ids.begin(), ids.end()); twin != ids.end())
+    refuse(path, "word id " + std::to_string(*twin) + " appears twice");
+  for (int r = 0; r < data.descriptors.rows; ++r) {
+    const float* row = data.descriptors.ptr<float>(r);
+    for (int c = 0; c < data.descriptors.cols; ++c)
+      if (!std::isfinite(row[c]))
+        refuse(path, "word " + std::to_string(data.ids[std::size_t(r)]) +
+                         " has a value that is not a finite number");
+  }
 }
 
 void checkData(const VocabularyData& data) {
@@ -156,10 +183,9 @@ void writeVocabularyFile(const std::filesystem::path& path, const VocabularyData
   checkData(data);
   const std::string header = headerBytes(data);
   const std::string payload = payloadBytes(data);
-  std::ofstream file(path, std::ios::binary | std::ios::trunc);
-  if (!file) throw Error(ErrorCode::kIo, "cannot write vocabulary file " + path.string());
+  std::ostringstream bytes(std::ios::binary);
   {
-    boost::archive::binary_oarchive ar(file, kArchiveFlags);
+    boost::archive::binary_oarchive ar(bytes, kArchiveFlags);
     ar.save_binary(kMagic, sizeof(kMagic));
     const std::uint32_t version = kVocabularyFileVersion;
     const auto header_length = static_cast<std::uint32_t>(header.size());
@@ -171,8 +197,14 @@ void writeVocabularyFile(const std::filesystem::path& path, const VocabularyData
     ar << payload_length << payload_crc;
     ar.save_binary(payload.data(), payload.size());
   }
-  file.flush();
-  if (!file) throw Error(ErrorCode::kIo, "cannot write vocabulary file " + path.string());
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (!file) writeFailed(path, "cannot write vocabulary file", errno);
+  const std::string content = bytes.str();
+  int error = 0;
+  if (std::fwrite(content.data(), 1, content.size(), file) != content.size()) error = errno;
+  if (std::fflush(file) != 0 && error == 0) error = errno;
+  if (std::fclose(file) != 0 && error == 0) error = errno;
+  if (error != 0) writeFailed(path, "cannot write vocabulary file", error);
 }
 
 VocabularyData readVocabularyFile(const std::filesystem::path& path,
@@ -263,6 +295,7 @@ VocabularyData readVocabularyFile(const std::filesystem::path& path,
       std::memcpy(data.created_frames.data(), payload.data() + n * 8, n * 8);
       std::memcpy(data.descriptors.data, payload.data() + n * 16, n * 4 * data.dim);
     }
+    checkWords(path, data);
     return data;
   } catch (const Error&) {
     throw;
@@ -276,17 +309,19 @@ VocabularyData readVocabularyFile(const std::filesystem::path& path,
 void writeVocabularyText(const std::filesystem::path& path, const VocabularyData& data) {
   checkData(data);
   std::FILE* file = std::fopen(path.c_str(), "w");
-  if (!file) throw Error(ErrorCode::kIo, "cannot write vocabulary text " + path.string());
+  if (!file) writeFailed(path, "cannot write vocabulary text", errno);
+  int error = 0;
   // RTAB-Map takes the descriptor dimension from the number that ends its header line.
-  bool ok = std::fprintf(file, "%s%d\n", kRtabmapHeader, data.dim) > 0;
-  for (std::size_t i = 0; i < data.ids.size() && ok; ++i) {
-    ok = std::fprintf(file, "%lld", static_cast<long long>(data.ids[i])) > 0;
+  if (std::fprintf(file, "%s%d\n", kRtabmapHeader, data.dim) < 0) error = errno ? errno : EIO;
+  for (std::size_t i = 0; i < data.ids.size() && error == 0; ++i) {
+    bool ok = std::fprintf(file, "%lld", static_cast<long long>(data.ids[i])) > 0;
     const float* row = data.descriptors.ptr<float>(int(i));
     for (int d = 0; d < data.dim && ok; ++d) ok = std::fprintf(file, " %.9g", row[d]) > 0;
     ok = ok && std::fputc('\n', file) != EOF;
+    if (!ok) error = errno;
   }
-  ok = (std::fclose(file) == 0) && ok;
-  if (!ok) throw Error(ErrorCode::kIo, "cannot write vocabulary text " + path.string());
+  if (std::fclose(file) != 0 && error == 0) error = errno;
+  if (error != 0) writeFailed(path, "cannot write vocabulary text", error);
 }
 
 VocabularyData readVocabularyText(const std::filesystem::path& path, int expected_dim) {
@@ -335,6 +370,7 @@ VocabularyData readVocabularyText(const std::filesystem::path& path, int expecte
   if (data.dim <= 0) refuse(path, "no word");
   data.descriptors = cv::Mat(int(data.ids.size()), data.dim, CV_32F);
   if (!values.empty()) std::memcpy(data.descriptors.data, values.data(), values.size() * 4);
+  checkWords(path, data);
   return data;
 }
 

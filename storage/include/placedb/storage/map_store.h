@@ -89,6 +89,7 @@ class MapStore {
   std::int64_t beginSession(const std::string& source,
                             const std::map<std::string, std::string>& settings,
                             const std::string& software_version);
+  void setSourceDigest(std::int64_t session_id, const std::string& digest);
   void endSession(std::int64_t session_id, bool clean);
   // Marks an ended session as running again (a resumed session): ended_at NULL, not clean.
   void reopenSession(std::int64_t session_id);

@@ -22,6 +22,8 @@ struct SessionRecord {
   bool clean_close = false;
   std::string software_version;
   std::string source;
+  // What the source held when the session began (see Map::beginSession); nullopt: not recorded.
+  std::optional<std::string> source_digest;
 };
 
 struct FrameTimings {  // milliseconds per stage

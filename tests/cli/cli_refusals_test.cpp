@@ -1,0 +1,222 @@
+// Bad input given to `placedb`: a folder where a file belongs, an unusable query image, the map as
+// an export's output, settings a component refuses, a log that cannot or must not be written, an
+// empty list. Each gives its documented exit status, names the file, and leaves every file as it
+// was; a resumed session takes its stored settings.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "cli_scratch.h"
+#include "placedb/storage/map_store.h"
+
+namespace placedb::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string listOf(const fs::path& seq, int first, int count) {
+  std::string text;
+  for (int i = first; i < first + count; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof name, "images/%06d.png", i);
+    text += (seq / name).string() + "\n";
+  }
+  return text;
+}
+
+TEST(CliRefusals, FolderInAListIsABadFrameAndAFolderConfigIsIo) {
+  auto seq = smallSequence(6);
+  auto dir = scratchDir("CliRefusals_folder");
+  fs::create_directories(dir / "a_folder.png");
+  std::ofstream(dir / "list.txt") << listOf(seq, 0, 3) << (dir / "a_folder.png").string() << "\n"
+                                  << listOf(seq, 3, 3);
+  auto map = (dir / "m.placedb").string();
+  auto r = placedb({"map", map, (dir / "list.txt").string(), "-q"}, dir);
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_NE(r.err.find("placedb: warning: frame 3 (" + (dir / "a_folder.png").string()),
+            std::string::npos)
+      << r.err;
+
+  auto query = placedb(
+      {"query", map, (dir / "a_folder.png").string(), (seq / "images" / "000001.png").string()},
+      dir);
+  EXPECT_EQ(query.exit_code, 3) << describe(query);
+  EXPECT_NE(query.err.find("a_folder.png"), std::string::npos) << query.err;
+  EXPECT_NE(query.out.find("000001.png"), std::string::npos) << query.out;
+
+  const std::string before = bytesOf(map);
+  expectCleanError(placedb({"map", map, (dir / "list.txt").string(), "--new-session", "--config",
+                            (dir / "a_folder.png").string()},
+                           dir),
+                   3, "a_folder.png");
+  EXPECT_TRUE(bytesOf(map) == before);
+}
+
+TEST(CliRefusals, QueryAnswersEveryImageAfterAnUnusableOne) {
+  auto seq = smallSequence(6);
+  auto dir = scratchDir("CliRefusals_query");
+  auto map = (dir / "m.placedb").string();
+  ASSERT_EQ(placedb({"map", map, (seq / "frames.txt").string(), "-q"}, dir).exit_code, 0);
+  cv::imwrite((dir / "one.png").string(), cv::Mat(1, 1, CV_8UC1, cv::Scalar(7)));
+  const auto good = (seq / "images" / "000002.png").string();
+  auto r = placedb({"query", map, (dir / "one.png").string(), good}, dir);
+  EXPECT_EQ(r.exit_code, 3) << describe(r);
+  EXPECT_EQ(r.err.rfind("placedb: error: ", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find("one.png"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find(good + ":"), std::string::npos) << describe(r);
+}
+
+TEST(CliRefusals, VocabExportRefusesTheMapUnderAnyNameAndLeavesNoPartialFile) {
+  auto seq = smallSequence(8);
+  auto dir = scratchDir("CliRefusals_export");
+  auto map = (dir / "m.placedb").string();
+  ASSERT_EQ(placedb({"map", map, (seq / "frames.txt").string(), "-q"}, dir).exit_code, 0);
+  fs::create_directories(dir / "sub");
+  fs::create_symlink(map, dir / "link.placedb");
+  const std::string before = bytesOf(map);
+  for (const auto& output : std::vector<std::string>{
+           map, (dir / "sub" / ".." / "m.placedb").string(), (dir / "link.placedb").string()}) {
+    for (bool text : {false, true}) {
+      std::vector<std::string> args = {"vocab", "export", map, output};
+      if (text) args.push_back("--text");
+      expectCleanError(placedb(args, dir), 2, "is the map");
+      EXPECT_TRUE(bytesOf(map) == before) << output;
+    }
+  }
+  // A good export leaves exactly its file.
+  ASSERT_EQ(placedb({"vocab", "export", map, (dir / "out.pvoc").string()}, dir).exit_code, 0);
+  for (const auto& entry : fs::directory_iterator(dir))
+    EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+}
+
+TEST(CliRefusals, ResumeTakesTheSessionsStoredExtractor) {
+  auto seq = smallSequence(10);
+  auto dir = scratchDir("CliRefusals_resume_extractor");
+  auto map = (dir / "y.placedb").string();
+  auto source = (seq / "frames.txt").string();
+  auto first =
+      placedb({"map", map, source, "--stop-after", "4", "--set", "extractor=kaze", "-q"}, dir);
+  ASSERT_EQ(first.exit_code, 0) << describe(first);
+  auto rest = placedb({"map", map, source, "-q"}, dir);
+  ASSERT_EQ(rest.exit_code, 0) << describe(rest);
+  storage::MapStore store(map, storage::OpenMode::kReadOnly);
+  ASSERT_EQ(store.sessions().size(), 1u);
+  EXPECT_EQ(store.frameCount(), 10);
+  EXPECT_EQ(store.settings(1).at("extractor"), "kaze");
+}
+
+TEST(CliRefusals, RefusedRunsCreateAndChangeNothing) {
+  auto seq = smallSequence(5);
+  auto dir = scratchDir("CliRefusals_nothing");
+  auto source = (seq / "frames.txt").string();
+  auto fresh = (dir / "fresh.placedb").string();
+  // Settings the catalogue accepts but a component refuses, or the catalogue itself refuses.
+  for (const std::string setting : {"hessian_threshold=1e308", "wm_recent_ratio=1"}) {
+    expectCleanError(placedb({"map", fresh, source, "--set", setting}, dir), 2,
+                     setting.substr(0, setting.find('=')));
+    EXPECT_FALSE(fs::exists(fresh)) << setting;
+    EXPECT_FALSE(fs::exists(fresh + "-lock")) << setting;
+  }
+
+  auto map = (dir / "m.placedb").string();
+  ASSERT_EQ(placedb({"map", map, source, "-q"}, dir).exit_code, 0);
+  const std::string before = bytesOf(map);
+  expectCleanError(placedb({"map", map, source, "--log", (dir / "nodir" / "x.csv").string()}, dir),
+                   3, "nodir");
+  EXPECT_FALSE(fs::exists(dir / "nodir"));
+  std::ofstream(dir / "empty.txt");
+  std::ofstream(dir / "comments.txt") << "# nothing here\n\n   \n# still nothing\n";
+  for (const char* list : {"empty.txt", "comments.txt"})
+    expectCleanError(placedb({"map", map, (dir / list).string()}, dir), 3, list);
+  EXPECT_TRUE(bytesOf(map) == before);
+}
+
+TEST(CliRefusals, LogOfAnotherRunOrFormatIsRefused) {
+  auto seq = smallSequence(6);
+  auto dir = scratchDir("CliRefusals_log");
+  auto source = (seq / "frames.txt").string();
+  auto log = (dir / "run.csv").string();
+  auto map = (dir / "m.placedb").string();
+  ASSERT_EQ(placedb({"map", map, source, "--log", log, "--stop-after", "3", "-q"}, dir).exit_code,
+            0);
+  // Resuming the same session appends to its log.
+  ASSERT_EQ(placedb({"map", map, source, "--log", log, "-q"}, dir).exit_code, 0);
+  const std::string done = bytesOf(log);
+  EXPECT_EQ(lines(done).size(), 7u);
+
+  // A new session (another map, or this one again) does not.
+  auto other = (dir / "other.placedb").string();
+  expectCleanError(placedb({"map", other, source, "--log", log}, dir), 2, log);
+  EXPECT_FALSE(fs::exists(other));
+  const std::string map_before = bytesOf(map);
+  expectCleanError(placedb({"map", map, source, "--log", log}, dir), 2, log);
+  EXPECT_TRUE(bytesOf(map) == map_before);
+  EXPECT_TRUE(bytesOf(log) == done);
+
+  std::ofstream(dir / "foreign.csv") << "frame,score\n0,0.5\n";
+  expectCleanError(placedb({"map", other, source, "--log", (dir / "foreign.csv").string()}, dir), 2,
+                   "foreign.csv");
+  EXPECT_FALSE(fs::exists(other));
+}
+
+TEST(CliRefusals, ByteOrderMarkStartsAListOrAConfigHarmlessly) {
+  auto seq = smallSequence(4);
+  auto dir = scratchDir("CliRefusals_bom");
+  std::ofstream(dir / "list.txt") << "\xEF\xBB\xBF" << listOf(seq, 0, 4);
+  std::ofstream(dir / "run.conf") << "\xEF\xBB\xBFt_loop = 0.2\n";
+  auto map = (dir / "m.placedb").string();
+  auto r = placedb(
+      {"map", map, (dir / "list.txt").string(), "--config", (dir / "run.conf").string(), "-q"},
+      dir);
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+  storage::MapStore store(map, storage::OpenMode::kReadOnly);
+  EXPECT_EQ(store.settings(1).at("t_loop"), "0.2");
+  EXPECT_EQ(store.frameCount(), 4);
+}
+
+TEST(CliRefusals, ListEditedBetweenStopAndResumeIsNotResumedSilently) {
+  auto seq = smallSequence(8);
+  auto dir = scratchDir("CliRefusals_edited");
+  auto list = dir / "list.txt";
+  std::ofstream(list) << listOf(seq, 0, 8);
+  auto map = (dir / "m.placedb").string();
+  ASSERT_EQ(placedb({"map", map, list.string(), "--stop-after", "4", "-q"}, dir).exit_code, 0);
+  // Frames 2 and 3 dropped: index 4 would now be another image.
+  std::ofstream(list, std::ios::trunc) << listOf(seq, 0, 2) << listOf(seq, 4, 4);
+  const std::string before = bytesOf(map);
+  expectCleanError(placedb({"map", map, list.string()}, dir), 2, "--new-session");
+  EXPECT_TRUE(bytesOf(map) == before);
+  auto fresh = placedb({"map", map, list.string(), "--new-session", "-q"}, dir);
+  ASSERT_EQ(fresh.exit_code, 0) << describe(fresh);
+  storage::MapStore store(map, storage::OpenMode::kReadOnly);
+  EXPECT_EQ(store.sessions().size(), 2u);
+  EXPECT_EQ(store.frameCount(), 10);
+}
+
+TEST(CliRefusals, BrokenVideoIsOneErrorLine) {
+  auto dir = scratchDir("CliRefusals_video");
+  std::ofstream video(dir / "broken.mp4", std::ios::binary);
+  video << std::string(
+               "\0\0\0\x18"
+               "ftypmp42",
+               12)
+        << std::string(4000, '\x33');
+  video.close();
+  auto r = placedb({"map", (dir / "m.placedb").string(), (dir / "broken.mp4").string(), "-q"}, dir);
+  expectCleanError(r, 3, "broken.mp4");
+  EXPECT_EQ(lines(r.err).size(), 1u) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "m.placedb"));
+}
+
+TEST(CliRefusals, StopAfterZeroIsAShortUsageError) {
+  auto dir = scratchDir("CliRefusals_stop_after");
+  auto r = placedb({"map", (dir / "m.placedb").string(), dir.string(), "--stop-after", "0"}, dir);
+  EXPECT_EQ(r.exit_code, 2) << describe(r);
+  EXPECT_LT(r.err.size(), 200u) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "m.placedb"));
+}
+
+}  // namespace
+}  // namespace placedb::testing
