@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <filesystem>
 #include <cstring>
 
 #include "database.h"
@@ -180,7 +181,12 @@ MapStore::MapStore(const std::string& given_path, OpenMode mode, const OpenOptio
     // would have met.
     auto reader = detail::openForInspection(path);
     const auto verdict = detail::judgeIdentity(detail::readIdentity(*reader, path), path, current);
-    if (verdict != detail::Verdict::kBlankSqlite) detail::checkIntegrity(*reader, path);
+    std::error_code size_error;
+    const auto bytes = std::filesystem::file_size(path, size_error);
+    const bool small_enough = options.integrity_check_max_bytes <= 0 ||
+                              (!size_error && std::int64_t(bytes) <= options.integrity_check_max_bytes);
+    if (verdict != detail::Verdict::kBlankSqlite && small_enough)
+      detail::checkIntegrity(*reader, path);
     if (verdict == detail::Verdict::kUpToDate) detail::checkSchemaObjects(*reader, path);
   }
   lock_fd_ = acquireWriterLock(path);

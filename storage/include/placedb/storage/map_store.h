@@ -30,6 +30,12 @@ struct OpenOptions {
   int busy_timeout_ms = 5000;
   // When > 0, caps the file at this many pages (SQLite's max_page_count): for disk-full tests.
   std::int64_t max_page_count = 0;
+  // A read-write open reads every page first (PRAGMA quick_check) on maps up to this size, so a
+  // damaged map is refused before anything is written to it. The check costs ~1-2 s a GB of
+  // CPU (more when the file is not cached), which would make reopening a large map slow
+  // whatever its working memory; larger maps rely on SQLITE_CORRUPT met while mapping (the frame
+  // is rolled back, exit 4) and on `sqlite3 MAP 'pragma quick_check'`. 0 checks every size.
+  std::int64_t integrity_check_max_bytes = std::int64_t{256} << 20;
 };
 
 // BEGIN IMMEDIATE on construction; rolls back on destruction unless committed.
