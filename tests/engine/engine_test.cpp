@@ -21,8 +21,8 @@ class EngineTest : public ::testing::Test {
   void SetUp() override {
     seq_ = rtabmapSamples();
     if (!seq_) GTEST_SKIP() << "no rtabmap_samples under " << datasetsDir();
-    path_ = scratchDir(::testing::UnitTest::GetInstance()->current_test_info()->name()) /
-            "map.placedb";
+    path_ =
+        scratchDir(::testing::UnitTest::GetInstance()->current_test_info()->name()) / "map.placedb";
   }
   const Sequence* seq_ = nullptr;
   std::filesystem::path path_;
@@ -129,9 +129,10 @@ TEST_F(EngineTest, SecondSessionClosesLoopsWithTheFirst) {
                      "JOIN locations b ON b.id = k.location_b "
                      "WHERE k.type = 1 AND a.session_id <> b.session_id"),
             10);
-  EXPECT_EQ(sqlCount(path_, "SELECT count(*) FROM links k JOIN locations a ON a.id = k.location_a "
-                            "JOIN locations b ON b.id = k.location_b "
-                            "WHERE k.type = 0 AND a.session_id <> b.session_id"),
+  EXPECT_EQ(sqlCount(path_,
+                     "SELECT count(*) FROM links k JOIN locations a ON a.id = k.location_a "
+                     "JOIN locations b ON b.id = k.location_b "
+                     "WHERE k.type = 0 AND a.session_id <> b.session_id"),
             0)
       << "neighbour links never join two sessions";
 }
@@ -167,7 +168,7 @@ TEST_F(EngineTest, AnotherExtractorOnTheSameMapIsRefused) {
     map->process(seq_->images[0], 0, "a");
   }
   Options sift;
-  sift.extractor = "sift";
+  sift.extractor = Extractor::kSift;
   try {
     Map::open(path_.string(), sift);
     FAIL() << "a SIFT session on a SURF map was accepted";

@@ -133,12 +133,13 @@ TEST_F(VocabularyImport, RefusalsLeaveTheMapAsItWas) {
     std::ofstream(truncated, std::ios::binary) << bytes.substr(0, bytes.size() / 2);
   }
   Options kaze;
-  kaze.extractor = "kaze";
+  kaze.extractor = Extractor::kKaze;
   const std::vector<std::pair<std::filesystem::path, Options>> refused = {{truncated, Options()},
                                                                           {file_, kaze}};
   for (const auto& [file, options] : refused) {
-    SCOPED_TRACE(file.filename().string() + " with extractor " + options.extractor);
-    const auto path = dir_ / ("new_" + options.extractor + ".placedb");
+    const std::string extractor = toString(options.extractor);
+    SCOPED_TRACE(file.filename().string() + " with extractor " + extractor);
+    const auto path = dir_ / ("new_" + extractor + ".placedb");
     auto map = Map::open(path.string(), options);
     EXPECT_EQ(code([&] { map->importVocabulary(file.string(), false, VocabularyMode::kFixed); }),
               static_cast<int>(ErrorCode::kVocabularyRefused));

@@ -12,12 +12,15 @@
 
 #include <opencv2/core.hpp>
 
+#include "placedb/options.h"
+
 namespace placedb {
 
+// Defaults are Options' (geometry_min_inliers, geometry_max_error_px, geometry_match_ratio).
 struct GeometricCheckSettings {
-  int min_inliers = 0;        // matches that must agree; 0 switches the check off
-  double max_error_px = 3.0;  // RANSAC distance from the epipolar line, pixels
-  double match_ratio = 0.8;   // nearest / second-nearest descriptor distance for a match
+  int min_inliers = Options().geometry_min_inliers;       // matches that must agree; 0 = no check
+  double max_error_px = Options().geometry_max_error_px;  // RANSAC distance from the epipolar line
+  double match_ratio = Options().geometry_match_ratio;    // nearest / second-nearest distance
 };
 
 struct GeometricResult {

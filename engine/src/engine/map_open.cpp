@@ -37,11 +37,11 @@ void MapImpl::configure(const Options& options) {
   extractor_ = makeFeatureExtractor(toFeatureOptions(options));
   if (auto made_with = store_->getStateText(kMapExtractorKey);
       made_with && *made_with != extractor_->signature())
-    throw Error(
-        ErrorCode::kInvalidArgument,
-        fmt::format("{} was made with {} features; extractor={} gives {}: mixing them is "
-                    "refused (use a new map)",
-                    store_->path(), *made_with, options.extractor, extractor_->signature()));
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("{} was made with {} features; extractor={} gives {}: mixing them is "
+                            "refused (use a new map)",
+                            store_->path(), *made_with, toString(options.extractor),
+                            extractor_->signature()));
   auto vocabulary_options = toVocabularyOptions(options);
   vocabulary_options.fixed = vocabulary_options.fixed || mode_ == Mode::kLocalisation ||
                              store_->getStateText(kVocabularyModeKey) == std::string("fixed");

@@ -4,7 +4,7 @@ namespace placedb {
 
 FeatureOptions toFeatureOptions(const Options& o) {
   FeatureOptions f;
-  f.extractor = o.extractor;
+  f.extractor = toString(o.extractor);
   f.hessian_threshold = o.hessian_threshold;
   f.octaves = o.octaves;
   f.intervals = o.intervals;
@@ -17,9 +17,8 @@ FeatureOptions toFeatureOptions(const Options& o) {
 
 vocab::VocabularyOptions toVocabularyOptions(const Options& o) {
   vocab::VocabularyOptions v;
-  v.rule = o.word_rule == "nndr" ? vocab::WordRule::kNndr : vocab::WordRule::kGreedy;
-  v.unit = o.distance_unit == "euclidean" ? vocab::DistanceUnit::kEuclidean
-                                          : vocab::DistanceUnit::kSquared;
+  v.rule = o.word_rule;
+  v.unit = o.distance_unit;
   v.t_nndr = static_cast<float>(o.t_nndr);
   v.t_nd1 = static_cast<float>(o.t_nd1);
   v.t_nd2 = static_cast<float>(o.t_nd2);
@@ -32,7 +31,7 @@ BayesFilterSettings toFilterSettings(const Options& o) {
   BayesFilterSettings s;
   s.gaussian_sigma = o.prediction_sigma;
   s.neighbourhood_links = o.prediction_links;
-  s.rule = o.decision_rule == "paper" ? DecisionRule::kPaper000 : DecisionRule::kRtabmap;
+  s.rule = o.decision_rule;
   s.loop_threshold = o.t_loop;
   s.loop_ratio = o.loop_ratio;
   return s;

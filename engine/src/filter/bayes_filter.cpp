@@ -205,7 +205,7 @@ void BayesFilter::decide(FilterOutcome& outcome) {
     outcome.reason = RejectReason::kNoHypothesis;
   } else {
     outcome.score = 1.0 - outcome.new_place_posterior;
-    if (settings_.rule == DecisionRule::kPaper000) {
+    if (settings_.rule == DecisionRule::kPaper) {
       outcome.reason = outcome.new_place_posterior < settings_.loop_threshold
                            ? RejectReason::kNone
                            : RejectReason::kBelowThreshold;
