@@ -7,14 +7,10 @@
 #include <sstream>
 
 #include "engine_fixture.h"
+#include "file_bytes.h"
 
 namespace placedb::testing {
 namespace {
-
-std::string fileBytes(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 class EngineTest : public ::testing::Test {
  protected:
@@ -143,7 +139,7 @@ TEST_F(EngineTest, LocalisationFindsThePlaceAndChangesNothing) {
     map->beginSession("first half");
     for (std::size_t i = 0; i < 40; ++i) map->process(seq_->images[i], i, seq_->paths[i]);
   }
-  const std::string before = fileBytes(path_);
+  const std::string before = readBytes(path_);
   auto map = Map::open(path_.string(), Options(), Map::Mode::kLocalisation);
   std::size_t found = 0;
   for (std::size_t i = 44; i < 80; i += 5) {  // revisits of frames i - 40
@@ -158,7 +154,7 @@ TEST_F(EngineTest, LocalisationFindsThePlaceAndChangesNothing) {
   EXPECT_GE(found, 6u);
   EXPECT_THROW(map->beginSession("x"), Error);
   map.reset();
-  EXPECT_EQ(fileBytes(path_), before) << "localisation must leave the map byte-identical";
+  EXPECT_EQ(readBytes(path_), before) << "localisation must leave the map byte-identical";
 }
 
 TEST_F(EngineTest, AnotherExtractorOnTheSameMapIsRefused) {

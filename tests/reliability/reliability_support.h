@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "child_process.h"
+#include "file_bytes.h"
 #include "placedb/storage/map_store.h"
 #include "test_paths.h"
 
@@ -31,16 +32,6 @@ inline std::vector<std::string> mapperArgs(const std::filesystem::path& map,
 inline void removeMapFiles(const std::filesystem::path& p) {
   for (const char* suffix : {"", "-wal", "-shm", "-lock"})
     std::filesystem::remove(p.string() + suffix);
-}
-
-inline std::string fileBytes(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-inline void writeBytes(const std::filesystem::path& p, const std::string& bytes) {
-  std::ofstream out(p, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
 }
 
 // "ok" when SQLite finds nothing wrong, else its report (or the open error).

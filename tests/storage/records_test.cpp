@@ -494,7 +494,7 @@ TEST(ReadOnlyMedia, MapInReadOnlyFolderOpensForReadingOnly) {
   }
   std::filesystem::remove(path + "-lock");
   ASSERT_FALSE(std::filesystem::exists(path + "-wal"));
-  const std::string before = testing::fileBytes(path);
+  const std::string before = testing::readBytes(path);
   namespace fs = std::filesystem;
   fs::permissions(path, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
   fs::permissions(folder, fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
@@ -523,7 +523,7 @@ TEST(ReadOnlyMedia, MapInReadOnlyFolderOpensForReadingOnly) {
   fs::permissions(path, fs::perms::owner_write, fs::perm_options::add);
   EXPECT_EQ(status, 0) << "1 wrong content, 2 write accepted, 3/5 wrong error code, "
                           "4 read-write open accepted, 9x child setup";
-  EXPECT_EQ(testing::fileBytes(path), before);
+  EXPECT_EQ(testing::readBytes(path), before);
 }
 
 }  // namespace

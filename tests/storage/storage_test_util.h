@@ -1,23 +1,15 @@
 #pragma once
 // Helpers shared by the storage tests.
-#include <fstream>
-#include <iterator>
 #include <string>
 #include <vector>
 
+#include "file_bytes.h"
 #include "placedb/storage/map_store.h"
 
 namespace placedb::storage::testing {
 
-inline std::string fileBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-inline void writeBytes(const std::string& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
+using placedb::testing::readBytes;
+using placedb::testing::writeBytes;
 
 // Writes one complete frame (frame row, location, words, references) in one transaction.
 inline void writeFrame(MapStore& store, std::int64_t session_id, std::int64_t index,
