@@ -9,6 +9,7 @@
 
 #include "engine/engine_state.h"
 #include "engine/geometric_check.h"
+#include "engine/state_keys.h"
 #include "features/feature_extractor.h"
 #include "filter/bayes_filter.h"
 #include "filter/inverted_index.h"
@@ -19,13 +20,6 @@
 #include "vocabulary/vocabulary.h"
 
 namespace placedb {
-
-// Engine-state key of a location's own keypoint descriptors (see encodeDescriptors).
-std::string keypointDescriptorsKey(std::int64_t location_id);
-// Engine-state keys: the extractor signature a map was made with, and its imported vocabulary's
-// mode ("fixed" or "seed"; absent without an import).
-inline constexpr const char* kMapExtractorKey = "map.extractor";
-inline constexpr const char* kVocabularyModeKey = "vocabulary.mode";
 
 class MapImpl final : public Map {
  public:
@@ -70,7 +64,7 @@ class MapImpl final : public Map {
     std::int64_t location = 0;  // kNewPlace (-1) when there is none
     bool passed = false;        // the geometric check (or no check) let it through
     int inliers = 0;
-    int matches = 0;  // descriptor matches behind the inliers
+    int matches = 0;        // descriptor matches behind the inliers
     bool temporal = false;  // passed on temporal_min_inliers, near the last accepted closure
   };
   Verified verifyHypothesis(const FilterOutcome& outcome, const Features& features,

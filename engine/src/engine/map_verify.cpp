@@ -18,10 +18,6 @@ double similarityOf(const std::vector<LocationSimilarity>& similarities, Locatio
 
 }  // namespace
 
-std::string keypointDescriptorsKey(std::int64_t location_id) {
-  return "keypoint_descriptors/" + std::to_string(location_id);
-}
-
 GeometricView MapImpl::viewOf(std::int64_t location_id,
                               const std::vector<storage::WordRef>& refs) const {
   GeometricView view;
