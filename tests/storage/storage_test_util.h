@@ -22,7 +22,7 @@ inline void writeFrame(MapStore& store, std::int64_t session_id, std::int64_t in
   frame.source_path = "img" + std::to_string(index) + ".png";
   frame.location_id = index + 1;
   store.insertFrame(frame);
-  store.insertLocation({index + 1, session_id, 1, Tier::kSTM, frame.id});
+  store.insertLocation({index + 1, session_id, 1, Tier::kStm, frame.id});
   store.addCoveredFrame(index + 1, frame.id);
   std::vector<WordRecord> words;
   std::vector<WordRef> refs;

@@ -62,12 +62,9 @@ void MapImpl::restoreFromStore() {
   // Tiers: age is the creation order, which location ids follow.
   MemorySnapshot snapshot;
   snapshot.next_age = counters_.next_location_id;
-  const std::pair<storage::Tier, Tier> tiers[] = {{storage::Tier::kSTM, Tier::kStm},
-                                                  {storage::Tier::kWM, Tier::kWm},
-                                                  {storage::Tier::kLTM, Tier::kLtm}};
   std::vector<std::int64_t> live;  // STM and WM
-  for (auto [stored, tier] : tiers) {
-    for (const auto& row : store_->locationsInTier(stored)) {
+  for (Tier tier : {Tier::kStm, Tier::kWm, Tier::kLtm}) {
+    for (const auto& row : store_->locationsInTier(tier)) {
       snapshot.locations.push_back({row.id, tier, row.weight, row.id});
       if (tier == Tier::kStm) snapshot.stm.push_back(row.id);
       if (tier != Tier::kLtm) live.push_back(row.id);
@@ -196,7 +193,7 @@ SessionInfo MapImpl::beginSession(const std::string& source) {
       if (r.tier == Tier::kStm) r.tier = Tier::kWm;
     snap.stm.clear();
     tiers_->restore(snap);
-    store_->setTier(stm, storage::Tier::kWM);
+    store_->setTier(stm, storage::Tier::kWm);
   }
   counters_.last_location = 0;
   counters_.last_session = id;
@@ -261,8 +258,8 @@ std::string MapImpl::checkConsistency() const {
   for (std::int64_t id : live) {
     auto stored = store_->location(id);
     if (!stored) return fmt::format("location {} is not in the file", id);
-    auto expected = tiers_->tierOf(id) == Tier::kStm ? storage::Tier::kSTM : storage::Tier::kWM;
-    if (stored->tier != expected) return fmt::format("location {} has another tier on file", id);
+    if (stored->tier != tiers_->tierOf(id))
+      return fmt::format("location {} has another tier on file", id);
   }
   return {};
 }

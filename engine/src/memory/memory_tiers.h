@@ -25,12 +25,13 @@
 #include <vector>
 
 #include "placedb/options.h"
+#include "placedb/storage/records.h"
 
 namespace placedb {
 
 using MemoryLocationId = std::int64_t;
 
-enum class Tier : std::uint8_t { kStm = 0, kWm = 1, kLtm = 2 };
+using storage::Tier;
 const char* toString(Tier tier);
 Tier parseTier(const std::string& name);  // "stm", "wm", "ltm"; kInvalidArgument otherwise
 
