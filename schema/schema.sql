@@ -1,4 +1,4 @@
--- placedb map schema: the current version (2), as one file.
+-- placedb map schema: the current version (3), as one file.
 -- It must equal the result of applying migrations/0001..N in order; a test compares
 -- sqlite_master of both. `sqlite3 new.db < schema/schema.sql` makes an empty placedb map.
 -- See schema/SCHEMA.md for the meaning of every table, column and view.

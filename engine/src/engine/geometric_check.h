@@ -1,8 +1,9 @@
 #pragma once
 // Epipolar verification of a loop-closure hypothesis. The query image's features are matched to
-// the candidate location's keypoints by descriptor (the location keeps, per keypoint, the word it
-// was quantised to; the word's descriptor stands in for the keypoint's), with a ratio test, and
-// a RANSAC fundamental matrix counts how many matches one rigid scene explains. Look-alike
+// the candidate location's keypoints by their own descriptors (kept with the location, see
+// encodeDescriptors; only a map made before they were kept falls back to the descriptors of the
+// words its keypoints were quantised to), with a ratio test, and a RANSAC fundamental matrix
+// counts how many matches one rigid scene explains. Look-alike
 // places share words too, but their matches scatter instead of agreeing on one geometry.
 //
 // Words alone pair too few keypoints: a true revisit of lip6_outdoor shares ~20 words out of 400
