@@ -117,10 +117,10 @@ TEST(Options, ComponentDefaultsAreTheOptionsDefaults) {
   EXPECT_EQ(v.checks, vo.checks);
 
   const BayesFilterSettings b, bo = toFilterSettings(o);
-  EXPECT_EQ(b.gaussian_sigma, bo.gaussian_sigma);
-  EXPECT_EQ(b.neighbourhood_links, bo.neighbourhood_links);
+  EXPECT_EQ(b.prediction_sigma, bo.prediction_sigma);
+  EXPECT_EQ(b.prediction_links, bo.prediction_links);
   EXPECT_EQ(b.rule, bo.rule);
-  EXPECT_EQ(b.loop_threshold, bo.loop_threshold);
+  EXPECT_EQ(b.t_loop, bo.t_loop);
   EXPECT_EQ(b.loop_ratio, bo.loop_ratio);
 
   const MemorySettings m, mo = toMemorySettings(o);

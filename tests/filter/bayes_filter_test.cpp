@@ -24,7 +24,7 @@ LinkGraph chainOver(const std::vector<LocationId>& ids) {
 // The hand computations below use RTAB-Map's 2013 decision settings, not the engine's defaults.
 BayesFilterSettings rtabmap2013() {
   BayesFilterSettings s;
-  s.loop_threshold = 0.11;
+  s.t_loop = 0.11;
   s.loop_ratio = 0.9;
   return s;
 }
@@ -318,8 +318,8 @@ TEST(BayesFilter, RestoredStateContinuesBitIdentically) {
 TEST(BayesFilterSettings, ValidateNamesEveryBadField) {
   EXPECT_NO_THROW(BayesFilterSettings{}.validate());
   BayesFilterSettings bad;
-  bad.loop_threshold = -0.1;
-  bad.gaussian_sigma = -1.0;
+  bad.t_loop = -0.1;
+  bad.prediction_sigma = -1.0;
   bad.loop_ratio = 1.5;
   try {
     bad.validate();
@@ -327,8 +327,8 @@ TEST(BayesFilterSettings, ValidateNamesEveryBadField) {
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
     const std::string message = e.what();
-    EXPECT_NE(message.find("loop_threshold"), std::string::npos) << message;
-    EXPECT_NE(message.find("gaussian_sigma"), std::string::npos) << message;
+    EXPECT_NE(message.find("t_loop"), std::string::npos) << message;
+    EXPECT_NE(message.find("prediction_sigma"), std::string::npos) << message;
     EXPECT_NE(message.find("loop_ratio"), std::string::npos) << message;
   }
   EXPECT_THROW(BayesFilter{bad}, Error);

@@ -29,10 +29,10 @@ vocab::VocabularyOptions toVocabularyOptions(const Options& o) {
 
 BayesFilterSettings toFilterSettings(const Options& o) {
   BayesFilterSettings s;
-  s.gaussian_sigma = o.prediction_sigma;
-  s.neighbourhood_links = o.prediction_links;
+  s.prediction_sigma = o.prediction_sigma;
+  s.prediction_links = o.prediction_links;
   s.rule = o.decision_rule;
-  s.loop_threshold = o.t_loop;
+  s.t_loop = o.t_loop;
   s.loop_ratio = o.loop_ratio;
   return s;
 }

@@ -8,12 +8,10 @@ namespace placedb {
 struct BayesFilterSettings {
   double new_place_stays = 0.9;        // p(S_t=-1 | S_{t-1}=-1); p(i|-1) = (1 - this) / M
   double location_to_new_place = 0.1;  // p(S_t=-1 | S_{t-1}=j); the rest spreads around j
-  // in links, of the discrete Gaussian around j (prediction_sigma)
-  double gaussian_sigma = Options().prediction_sigma;
-  // the Gaussian reaches locations up to this many links from j (prediction_links)
-  int neighbourhood_links = Options().prediction_links;
+  double prediction_sigma = Options().prediction_sigma;  // links, the Gaussian around j
+  int prediction_links = Options().prediction_links;  // the Gaussian reaches this many links from j
   DecisionRule rule = Options().decision_rule;
-  double loop_threshold = Options().t_loop;  // T_loop
+  double t_loop = Options().t_loop;          // T_loop
   double loop_ratio = Options().loop_ratio;  // ratio test of kRtabmap; 0 turns it off
 
   // kInvalidArgument naming every out-of-range field and its valid range; accepts at least
