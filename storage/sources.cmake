@@ -17,7 +17,9 @@ target_sources(placedb_storage PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/migrations.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_store.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_store_memory.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/map_store_signatures.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/map_store_words.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/map_store_links.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/map_store_state.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/records.cpp
   ${PLACEDB_MIGRATIONS_CPP})
 target_include_directories(placedb_storage PRIVATE ${CMAKE_CURRENT_LIST_DIR}/src)

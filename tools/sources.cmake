@@ -25,11 +25,13 @@ add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/graph_export.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_export.cpp)
 target_include_directories(placedb_cli PUBLIC ${CMAKE_CURRENT_LIST_DIR}/src)
-# The demo and vocab commands use engine internals (synthetic sequences, the vocabulary file).
+# The vocab command uses an engine internal (the vocabulary file); the demo renders synthetic
+# sequences.
 target_link_libraries(placedb_cli
   PUBLIC placedb_engine placedb_storage CLI11::CLI11 fmt::fmt nlohmann_json::nlohmann_json
          ${OpenCV_LIBS}
-  PRIVATE placedb_engine_internal PkgConfig::PLPLOT placedb_build_flags placedb_version)
+  PRIVATE placedb_engine_internal placedb_synthetic PkgConfig::PLPLOT placedb_build_flags
+          placedb_version)
 
 add_executable(placedb ${CMAKE_CURRENT_LIST_DIR}/src/main.cpp)
 target_link_libraries(placedb PRIVATE placedb_cli placedb_build_flags placedb_version)

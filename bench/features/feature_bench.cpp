@@ -100,6 +100,7 @@ int main(int argc, char** argv) {
       cv::setNumThreads(threads);
       FeatureOptions options;
       options.threads = threads;
+      options.hessian_threshold = 500;  // RTAB-Map's SURF default, which README.md's figures use
       options.max_features = max_features;
       const std::string suffix = " (" + std::to_string(threads) + "T)";
       for (const char* name : {"surf", "sift", "kaze", "orb"}) {

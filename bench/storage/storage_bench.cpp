@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
       record.source_index = frame - 1;
       record.location_id = frame;
       store.insertFrame(record);
-      store.insertLocation({frame, session, 0, placedb::storage::Tier::kWM, frame});
+      store.insertLocation({frame, session, 0, placedb::storage::Tier::kWm, frame});
       store.addCoveredFrame(frame, frame);
 
       std::vector<placedb::storage::WordRecord> words;

@@ -102,9 +102,7 @@ TEST(CliErrors, RandomBytesMapIsRefused) {
   expectCleanError(placedb({"map", (dir / "m.placedb").string(), source}, dir), 4);
   expectCleanError(placedb({"info", (dir / "m.placedb").string()}, dir), 4);
   // Left untouched.
-  std::ifstream in(dir / "m.placedb", std::ios::binary);
-  std::string after((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  EXPECT_EQ(after, bytes);
+  EXPECT_EQ(readBytes(dir / "m.placedb"), bytes);
 }
 
 TEST(CliErrors, ForeignSqliteFileIsRefused) {

@@ -6,6 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 
+#include "file_bytes.h"
 #include "image_source.h"
 #include "placedb/error.h"
 #include "test_paths.h"
@@ -16,9 +17,7 @@ namespace {
 namespace fs = std::filesystem;
 using placedb::testing::scratchDir;
 
-void writeBytes(const fs::path& path, const std::string& bytes) {
-  std::ofstream(path, std::ios::binary) << bytes;
-}
+using placedb::testing::writeBytes;
 
 cv::Mat pattern() {
   cv::Mat image(48, 64, CV_8UC3);

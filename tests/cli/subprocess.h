@@ -1,18 +1,12 @@
 #pragma once
 // Runs a program with arguments (no shell), capturing stdout, stderr and the exit status.
-#include <fcntl.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <chrono>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <sstream>
 #include <string>
-#include <thread>
 #include <vector>
+
+#include "child_process.h"
+#include "file_bytes.h"
 
 namespace placedb::testing {
 
@@ -25,47 +19,29 @@ class Process {
  public:
   // Starts `argv[0]` with `argv`; stdout and stderr go to files under `scratch`.
   Process(const std::vector<std::string>& argv, const std::filesystem::path& scratch,
-          const std::string& cwd = "") {
-    static int counter = 0;
-    ++counter;
-    out_path_ = scratch / ("stdout_" + std::to_string(counter) + ".txt");
-    err_path_ = scratch / ("stderr_" + std::to_string(counter) + ".txt");
-    std::vector<char*> args;
-    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-    args.push_back(nullptr);
-    pid_ = fork();
-    if (pid_ == 0) {
-      int out = open(out_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      int err = open(err_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      dup2(out, STDOUT_FILENO);
-      dup2(err, STDERR_FILENO);
-      if (!cwd.empty() && chdir(cwd.c_str()) != 0) _exit(126);
-      execv(args[0], args.data());
-      _exit(127);
-    }
-  }
+          const std::string& cwd = "")
+      : output_(outputUnder(scratch, cwd)), child_(argv, output_) {}
 
-  void signal(int sig) { kill(pid_, sig); }
+  void signal(int sig) { child_.signal(sig); }
 
   ProcessResult wait() {
     ProcessResult result;
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    if (WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
-    if (WIFSIGNALED(status)) result.exit_code = 128 + WTERMSIG(status);
-    result.out = slurp(out_path_);
-    result.err = slurp(err_path_);
+    result.exit_code = child_.exitCode();
+    result.out = readBytes(output_.stdout_file);
+    result.err = readBytes(output_.stderr_file);
     return result;
   }
 
-  static std::string slurp(const std::filesystem::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+ private:
+  static ChildOutput outputUnder(const std::filesystem::path& scratch, const std::string& cwd) {
+    static int counter = 0;
+    ++counter;
+    return {scratch / ("stdout_" + std::to_string(counter) + ".txt"),
+            scratch / ("stderr_" + std::to_string(counter) + ".txt"), cwd};
   }
 
- private:
-  pid_t pid_ = -1;
-  std::filesystem::path out_path_, err_path_;
+  ChildOutput output_;
+  ChildProcess child_;
 };
 
 inline ProcessResult run(const std::vector<std::string>& argv,

@@ -7,22 +7,18 @@
 #include <sstream>
 
 #include "engine_fixture.h"
+#include "file_bytes.h"
 
 namespace placedb::testing {
 namespace {
-
-std::string fileBytes(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 class EngineTest : public ::testing::Test {
  protected:
   void SetUp() override {
     seq_ = rtabmapSamples();
     if (!seq_) GTEST_SKIP() << "no rtabmap_samples under " << datasetsDir();
-    path_ = scratchDir(::testing::UnitTest::GetInstance()->current_test_info()->name()) /
-            "map.placedb";
+    path_ =
+        scratchDir(::testing::UnitTest::GetInstance()->current_test_info()->name()) / "map.placedb";
   }
   const Sequence* seq_ = nullptr;
   std::filesystem::path path_;
@@ -129,9 +125,10 @@ TEST_F(EngineTest, SecondSessionClosesLoopsWithTheFirst) {
                      "JOIN locations b ON b.id = k.location_b "
                      "WHERE k.type = 1 AND a.session_id <> b.session_id"),
             10);
-  EXPECT_EQ(sqlCount(path_, "SELECT count(*) FROM links k JOIN locations a ON a.id = k.location_a "
-                            "JOIN locations b ON b.id = k.location_b "
-                            "WHERE k.type = 0 AND a.session_id <> b.session_id"),
+  EXPECT_EQ(sqlCount(path_,
+                     "SELECT count(*) FROM links k JOIN locations a ON a.id = k.location_a "
+                     "JOIN locations b ON b.id = k.location_b "
+                     "WHERE k.type = 0 AND a.session_id <> b.session_id"),
             0)
       << "neighbour links never join two sessions";
 }
@@ -142,7 +139,7 @@ TEST_F(EngineTest, LocalisationFindsThePlaceAndChangesNothing) {
     map->beginSession("first half");
     for (std::size_t i = 0; i < 40; ++i) map->process(seq_->images[i], i, seq_->paths[i]);
   }
-  const std::string before = fileBytes(path_);
+  const std::string before = readBytes(path_);
   auto map = Map::open(path_.string(), Options(), Map::Mode::kLocalisation);
   std::size_t found = 0;
   for (std::size_t i = 44; i < 80; i += 5) {  // revisits of frames i - 40
@@ -157,7 +154,7 @@ TEST_F(EngineTest, LocalisationFindsThePlaceAndChangesNothing) {
   EXPECT_GE(found, 6u);
   EXPECT_THROW(map->beginSession("x"), Error);
   map.reset();
-  EXPECT_EQ(fileBytes(path_), before) << "localisation must leave the map byte-identical";
+  EXPECT_EQ(readBytes(path_), before) << "localisation must leave the map byte-identical";
 }
 
 TEST_F(EngineTest, AnotherExtractorOnTheSameMapIsRefused) {
@@ -167,7 +164,7 @@ TEST_F(EngineTest, AnotherExtractorOnTheSameMapIsRefused) {
     map->process(seq_->images[0], 0, "a");
   }
   Options sift;
-  sift.extractor = "sift";
+  sift.extractor = Extractor::kSift;
   try {
     Map::open(path_.string(), sift);
     FAIL() << "a SIFT session on a SURF map was accepted";

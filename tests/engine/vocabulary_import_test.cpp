@@ -6,15 +6,11 @@
 #include <iterator>
 
 #include "engine_fixture.h"
+#include "file_bytes.h"
 #include "vocabulary/vocabulary_file.h"
 
 namespace placedb::testing {
 namespace {
-
-std::string bytesOf(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 class VocabularyImport : public ::testing::Test {
  protected:
@@ -118,27 +114,28 @@ TEST_F(VocabularyImport, RefusalsLeaveTheMapAsItWas) {
     map->beginSession("one frame");
     map->process(seq_->images[0], 0, seq_->paths[0]);
   }
-  const std::string before = bytesOf(used);
+  const std::string before = readBytes(used);
   EXPECT_EQ(code([&] {
               auto map = Map::open(used.string(), Options());
               map->importVocabulary(file_.string(), false, VocabularyMode::kSeed);
             }),
             static_cast<int>(ErrorCode::kInvalidArgument));
-  EXPECT_EQ(bytesOf(used), before);
+  EXPECT_EQ(readBytes(used), before);
 
   // A truncated file, and words of another extractor of the same dimension.
   const auto truncated = dir_ / "truncated.pvoc";
   {
-    const std::string bytes = bytesOf(file_);
+    const std::string bytes = readBytes(file_);
     std::ofstream(truncated, std::ios::binary) << bytes.substr(0, bytes.size() / 2);
   }
   Options kaze;
-  kaze.extractor = "kaze";
+  kaze.extractor = Extractor::kKaze;
   const std::vector<std::pair<std::filesystem::path, Options>> refused = {{truncated, Options()},
                                                                           {file_, kaze}};
   for (const auto& [file, options] : refused) {
-    SCOPED_TRACE(file.filename().string() + " with extractor " + options.extractor);
-    const auto path = dir_ / ("new_" + options.extractor + ".placedb");
+    const std::string extractor = toString(options.extractor);
+    SCOPED_TRACE(file.filename().string() + " with extractor " + extractor);
+    const auto path = dir_ / ("new_" + extractor + ".placedb");
     auto map = Map::open(path.string(), options);
     EXPECT_EQ(code([&] { map->importVocabulary(file.string(), false, VocabularyMode::kFixed); }),
               static_cast<int>(ErrorCode::kVocabularyRefused));

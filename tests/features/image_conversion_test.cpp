@@ -10,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "error_code.h"
 #include "features/image_conversion.h"
 #include "placedb/error.h"
 #include "test_paths.h"
@@ -17,15 +18,7 @@
 namespace placedb {
 namespace {
 
-ErrorCode codeOf(const std::function<void()>& call) {
-  try {
-    call();
-  } catch (const Error& e) {
-    return e.code();
-  }
-  ADD_FAILURE() << "no placedb::Error thrown";
-  return ErrorCode::kInternal;
-}
+using placedb::testing::codeOf;
 
 // A 64x48 ramp so that conversions can be checked pixel by pixel.
 cv::Mat greyRamp() {

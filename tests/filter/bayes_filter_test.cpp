@@ -21,6 +21,14 @@ LinkGraph chainOver(const std::vector<LocationId>& ids) {
   return g;
 }
 
+// The hand computations below use RTAB-Map's 2013 decision settings, not the engine's defaults.
+BayesFilterSettings rtabmap2013() {
+  BayesFilterSettings s;
+  s.t_loop = 0.11;
+  s.loop_ratio = 0.9;
+  return s;
+}
+
 double posteriorTotal(const BayesFilter& f) {
   double total = 0.0;
   for (const auto& entry : f.posterior()) total += entry.second;
@@ -64,7 +72,7 @@ TEST(Likelihood, HandComputedExampleFromSignatures) {
   // First update on the chain 1-2-3-4-5 from p(-1) = 1: prediction 0.9 for -1, 0.1/5 = 0.02 each.
   // Joint: -1 0.9 x 2.6035675 = 2.3432107, location 4 0.02 x 1.3763904 = 0.0275278, the other four
   // 0.02 each; total 2.4507385. Posterior: -1 0.956124324, 4 0.011232454, others 0.008160805.
-  BayesFilter filter;
+  BayesFilter filter(rtabmap2013());
   const FilterOutcome out = filter.update({1, 2, 3, 4, 5}, sims, chainOver({1, 2, 3, 4, 5}));
   EXPECT_NEAR(filter.posteriorOf(kNewPlace), 0.956124324137007, 1e-12);
   EXPECT_NEAR(filter.posteriorOf(4), 0.011232454438465, 1e-12);
@@ -173,7 +181,7 @@ TEST(Decision, RtabmapRuleThresholdAndRatioTest) {
   // Prior {-1: 0.5, 5: 0.5}. Prediction: -1 0.45 + 0.05 = 0.5; 5 0.45 + 0.005 = 0.455; others
   // 0.005. Joint: -1 0.875, 5 1.668, others 0.045 in all: score = 1.713 / 2.588 = 0.662.
   const FilterState prior{{{kNewPlace, 0.5}, {5, 0.5}}, 0.0};
-  BayesFilter filter;
+  BayesFilter filter(rtabmap2013());
   filter.restore(prior);
   FilterOutcome out = filter.update(kTenWm, tenSims(), graph);
   EXPECT_EQ(out.hypothesis, 5);
@@ -198,7 +206,7 @@ TEST(Decision, RtabmapRuleThresholdAndRatioTest) {
   EXPECT_TRUE(filter.update(kTenWm, tenSims(), graph).accepted);
 
   // Ratio test off.
-  BayesFilterSettings no_ratio;
+  BayesFilterSettings no_ratio = rtabmap2013();
   no_ratio.loop_ratio = 0.0;
   BayesFilter lenient(no_ratio);
   after_high.previous_score = 0.99;
@@ -206,7 +214,7 @@ TEST(Decision, RtabmapRuleThresholdAndRatioTest) {
   EXPECT_TRUE(lenient.update(kTenWm, tenSims(), graph).accepted);
 
   // From p(-1) = 1 the same frame only scores 0.074 < T_loop = 0.11.
-  BayesFilter cold;
+  BayesFilter cold(rtabmap2013());
   out = cold.update(kTenWm, tenSims(), graph);
   EXPECT_NEAR(out.score, 0.0744, 1e-3);
   EXPECT_EQ(out.reason, RejectReason::kBelowThreshold);
@@ -214,8 +222,8 @@ TEST(Decision, RtabmapRuleThresholdAndRatioTest) {
 
 TEST(Decision, Paper000RuleComparesTheNewPlacePosterior) {
   const LinkGraph graph;
-  BayesFilterSettings paper;
-  paper.rule = DecisionRule::kPaper000;
+  BayesFilterSettings paper = rtabmap2013();
+  paper.rule = DecisionRule::kPaper;
   BayesFilter filter(paper);
   // The frame above: p(-1) = 0.338 is not < 0.11, although RTAB-Map's rule accepts it.
   filter.restore({{{kNewPlace, 0.5}, {5, 0.5}}, 0.0});
@@ -310,8 +318,8 @@ TEST(BayesFilter, RestoredStateContinuesBitIdentically) {
 TEST(BayesFilterSettings, ValidateNamesEveryBadField) {
   EXPECT_NO_THROW(BayesFilterSettings{}.validate());
   BayesFilterSettings bad;
-  bad.loop_threshold = 0.0;
-  bad.gaussian_sigma = -1.0;
+  bad.t_loop = -0.1;
+  bad.prediction_sigma = -1.0;
   bad.loop_ratio = 1.5;
   try {
     bad.validate();
@@ -319,14 +327,11 @@ TEST(BayesFilterSettings, ValidateNamesEveryBadField) {
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
     const std::string message = e.what();
-    EXPECT_NE(message.find("loop_threshold"), std::string::npos) << message;
-    EXPECT_NE(message.find("gaussian_sigma"), std::string::npos) << message;
+    EXPECT_NE(message.find("t_loop"), std::string::npos) << message;
+    EXPECT_NE(message.find("prediction_sigma"), std::string::npos) << message;
     EXPECT_NE(message.find("loop_ratio"), std::string::npos) << message;
   }
   EXPECT_THROW(BayesFilter{bad}, Error);
-  EXPECT_EQ(parseDecisionRule("paper000"), DecisionRule::kPaper000);
-  EXPECT_EQ(std::string(toString(DecisionRule::kRtabmap)), "rtabmap");
-  EXPECT_THROW(parseDecisionRule("fabmap"), Error);
 }
 
 }  // namespace

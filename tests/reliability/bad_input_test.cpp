@@ -15,6 +15,7 @@
 
 #include "crash_scenario.h"
 #include "engine/map_impl.h"
+#include "error_code.h"
 #include "features/image_conversion.h"
 #include "placedb/map.h"
 #include "reliability_support.h"
@@ -23,20 +24,6 @@ namespace placedb::testing {
 namespace {
 
 namespace fs = std::filesystem;
-
-// The code of the placedb::Error that `f` throws; kInternal for any other exception, 0 for none.
-ErrorCode codeOf(const std::function<void()>& f, std::string* message = nullptr) {
-  try {
-    f();
-  } catch (const Error& e) {
-    if (message) *message = e.what();
-    return e.code();
-  } catch (const std::exception& e) {
-    if (message) *message = e.what();
-    return ErrorCode::kInternal;
-  }
-  return ErrorCode(0);
-}
 
 cv::Mat sceneImage(int frame = 3) {
   synthetic::SyntheticSequence sequence(crashSequenceOptions(10));
@@ -105,7 +92,7 @@ class BadImages : public ::testing::Test {
   void SetUp() override {
     dir_ = scratchDir("BadImages");
     cv::imwrite((dir_ / "good.png").string(), sceneImage());
-    good_png_ = fileBytes(dir_ / "good.png");
+    good_png_ = readBytes(dir_ / "good.png");
     std::vector<uchar> jpeg;
     cv::imencode(".jpg", sceneImage(), jpeg);
     good_jpeg_.assign(jpeg.begin(), jpeg.end());
@@ -131,12 +118,12 @@ TEST_F(BadImages, UnreadableFilesAreIoErrorsNamingTheFile) {
   };
   for (const auto& [what, path] : cases) {
     SCOPED_TRACE(what);
-    const std::string before = fs::is_regular_file(path) ? fileBytes(path) : "";
+    const std::string before = fs::is_regular_file(path) ? readBytes(path) : "";
     std::string message;
     EXPECT_EQ(codeOf([&] { loadGreyImage(path.string()); }, &message), ErrorCode::kIo) << message;
     EXPECT_NE(message.find(path.string()), std::string::npos) << message;
     if (fs::is_regular_file(path)) {
-      EXPECT_EQ(fileBytes(path), before);
+      EXPECT_EQ(readBytes(path), before);
     }
   }
 }
@@ -268,14 +255,14 @@ class BadMaps : public ::testing::Test {
 
   // Both modes refuse `path` with `code`, name it, and leave its bytes and folder unchanged.
   void expectRefused(const fs::path& path, ErrorCode code) {
-    const std::string before = fileBytes(path);
+    const std::string before = readBytes(path);
     for (auto mode : {Map::Mode::kMapping, Map::Mode::kLocalisation}) {
       SCOPED_TRACE(mode == Map::Mode::kMapping ? "mapping" : "localisation");
       std::string message;
       EXPECT_EQ(codeOf([&] { Map::open(path.string(), crashMapOptions(), mode); }, &message), code)
           << message;
       EXPECT_NE(message.find(path.string()), std::string::npos) << message;
-      EXPECT_EQ(fileBytes(path), before) << "a refused map was changed";
+      EXPECT_EQ(readBytes(path), before) << "a refused map was changed";
       EXPECT_FALSE(fs::exists(path.string() + "-wal"));
     }
   }
@@ -284,7 +271,7 @@ class BadMaps : public ::testing::Test {
 };
 
 TEST_F(BadMaps, DamagedForeignAndNewerMapsAreRefusedUntouched) {
-  const std::string whole = fileBytes(good_);
+  const std::string whole = readBytes(good_);
   ASSERT_GT(whole.size(), 8192u);
   {
     SCOPED_TRACE("truncated");
@@ -333,7 +320,7 @@ struct ZeroedPageOutcomes {
 
 ZeroedPageOutcomes zeroEachPage(const fs::path& dir, const fs::path& good) {
   ZeroedPageOutcomes out;
-  const std::string whole = fileBytes(good);
+  const std::string whole = readBytes(good);
   const std::size_t pages = whole.size() / 4096;
   EXPECT_GT(pages, 4u);
   for (std::size_t page = 1; page < pages; ++page) {
@@ -349,7 +336,7 @@ ZeroedPageOutcomes zeroEachPage(const fs::path& dir, const fs::path& good) {
         codeOf([&] { map = Map::open(path.string(), crashMapOptions()); }, &message);
     if (at_open != ErrorCode(0)) {
       EXPECT_EQ(at_open, ErrorCode::kMapRefused) << message;
-      EXPECT_EQ(fileBytes(path), damaged) << "a refused map was changed";
+      EXPECT_EQ(readBytes(path), damaged) << "a refused map was changed";
       if (message.find(path.string()) == std::string::npos) out.unnamed.push_back(message);
       ++out.refused_at_open;
       continue;

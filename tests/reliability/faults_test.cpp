@@ -192,7 +192,7 @@ TEST(ReadOnly, ReadOnlyMapFileIsRefusedForMappingAndLeftAsItWas) {
   fs::remove(map.string() + "-lock");
   ASSERT_FALSE(fs::exists(map.string() + "-wal"));
   fs::permissions(map, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
-  const std::string before = fileBytes(map);
+  const std::string before = readBytes(map);
 
   // As an unprivileged user (root writes through file permissions).
   ChildProcess child(mapperArgs(map, {"--uid", "65534", "--frames", "20"}));
@@ -201,7 +201,7 @@ TEST(ReadOnly, ReadOnlyMapFileIsRefusedForMappingAndLeftAsItWas) {
   ASSERT_TRUE(line) << "mapping a read-only map was accepted";
   EXPECT_EQ(line->rfind("error 6 ", 0), 0u) << "kReadOnly expected: " << *line;
   EXPECT_NE(line->find(map.string()), std::string::npos) << *line;
-  EXPECT_EQ(fileBytes(map), before);
+  EXPECT_EQ(readBytes(map), before);
 
   // Localisation only reads: it opens, and still changes nothing.
   {
@@ -209,7 +209,7 @@ TEST(ReadOnly, ReadOnlyMapFileIsRefusedForMappingAndLeftAsItWas) {
     EXPECT_EQ(reader->lastSession()->frames, 5);
     EXPECT_THROW(reader->beginSession("x"), Error);
   }
-  EXPECT_EQ(fileBytes(map), before);
+  EXPECT_EQ(readBytes(map), before);
   fs::permissions(map, fs::perms::owner_write, fs::perm_options::add);
 }
 

@@ -15,6 +15,7 @@
 
 #include "child_process.h"
 #include "placedb/storage/map_files.h"
+#include "file_bytes.h"
 #include "placedb/storage/map_store.h"
 #include "test_paths.h"
 
@@ -30,16 +31,6 @@ inline std::vector<std::string> mapperArgs(const std::filesystem::path& map,
 }
 
 inline void removeMapFiles(const std::filesystem::path& p) { storage::removeMap(p.string()); }
-
-inline std::string fileBytes(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-inline void writeBytes(const std::filesystem::path& p, const std::string& bytes) {
-  std::ofstream out(p, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
 
 // "ok" when SQLite finds nothing wrong, else its report (or the open error).
 inline std::string integrityCheck(const std::filesystem::path& map) {

@@ -53,7 +53,7 @@ TEST(Crash, KilledWriterLosesOnlyTheOpenFrame) {
       frame.session_id = session;
       frame.source_index = kCommitted;
       store.insertFrame(frame);
-      store.insertLocation({kCommitted + 1, session, 0, Tier::kSTM, frame.id});
+      store.insertLocation({kCommitted + 1, session, 0, Tier::kStm, frame.id});
       std::vector<float> values(8, 1.0f);
       store.insertWords({WordRecord::fromFloats(100000, frame.id, values.data(), 8)});
       const char signal_byte = 'x';

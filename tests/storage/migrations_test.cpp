@@ -17,7 +17,7 @@
 namespace placedb::storage {
 namespace {
 
-using testing::fileBytes;
+using testing::readBytes;
 using testing::writeBytes;
 
 // Raw access for setting up files the way other programs would.
@@ -73,8 +73,6 @@ std::vector<std::string> normalisedSchema(const std::string& path) {
   return schema;
 }
 
-std::string readText(const std::string& path) { return fileBytes(path); }
-
 void expectRefused(const std::string& path, OpenMode mode, const std::string& reason_part) {
   try {
     MapStore store(path, mode);
@@ -88,10 +86,10 @@ void expectRefused(const std::string& path, OpenMode mode, const std::string& re
 
 // Refused in both modes, with the file byte-identical and no companion files left behind.
 void expectRefusedUntouched(const std::string& path, const std::string& reason_part) {
-  const std::string before = fileBytes(path);
+  const std::string before = readBytes(path);
   expectRefused(path, OpenMode::kReadWrite, reason_part);
   expectRefused(path, OpenMode::kReadOnly, reason_part);
-  EXPECT_EQ(fileBytes(path), before) << path << " changed";
+  EXPECT_EQ(readBytes(path), before) << path << " changed";
   EXPECT_FALSE(std::filesystem::exists(path + "-wal"));
   EXPECT_FALSE(std::filesystem::exists(path + "-lock"));
 }
@@ -115,7 +113,7 @@ TEST(Migrations, AllMigrationsEqualSchemaSql) {
   const std::string from_file = (dir / "schema.db").string();
   {
     RawDb db(from_file);
-    db.exec(readText(PLACEDB_SCHEMA_SQL));
+    db.exec(readBytes(PLACEDB_SCHEMA_SQL));
   }
   const auto expected = normalisedSchema(from_file);
   ASSERT_GT(expected.size(), 10u);
@@ -235,9 +233,9 @@ TEST(Refusal, FilesThatAreNotSqlite) {
   fake_header[16] = 0x10;  // page size 4096
   fake_header[17] = 0x00;
   writeBytes((dir / "fake.db").string(), fake_header);
-  const std::string before = fileBytes((dir / "fake.db").string());
+  const std::string before = readBytes((dir / "fake.db").string());
   EXPECT_THROW(MapStore((dir / "fake.db").string(), OpenMode::kReadWrite), Error);
-  EXPECT_EQ(fileBytes((dir / "fake.db").string()), before);
+  EXPECT_EQ(readBytes((dir / "fake.db").string()), before);
 }
 
 TEST(Refusal, TruncatedMap) {
@@ -249,7 +247,7 @@ TEST(Refusal, TruncatedMap) {
     for (int i = 0; i < 40; ++i) testing::writeFrame(store, session, i, 50);
   }
   std::filesystem::remove(path + "-lock");
-  const std::string whole = fileBytes(path);
+  const std::string whole = readBytes(path);
   ASSERT_GT(whole.size(), 16u * 4096);
   const std::string half_pages = (dir / "half.db").string();
   writeBytes(half_pages, whole.substr(0, whole.size() / 2 / 4096 * 4096));

@@ -115,8 +115,8 @@ TEST_F(Records, LocationsTiersAndCoverage) {
       f.location_id = i == 3 ? 2 : i;  // frame 3 merged into location 2
       store_->insertFrame(f);
     }
-    store_->insertLocation({1, session_, 1, Tier::kSTM, 1});
-    store_->insertLocation({2, session_, 0, Tier::kSTM, 2});
+    store_->insertLocation({1, session_, 1, Tier::kStm, 1});
+    store_->insertLocation({2, session_, 0, Tier::kStm, 2});
     store_->addCoveredFrame(1, 1);
     store_->addCoveredFrame(2, 2);
     store_->addCoveredFrame(2, 3);
@@ -124,12 +124,12 @@ TEST_F(Records, LocationsTiersAndCoverage) {
     tx.commit();
   }
   store_->updateWeight(2, 5);
-  store_->setTier({1, 2}, Tier::kWM);
-  store_->setTier({1}, Tier::kLTM);
+  store_->setTier({1, 2}, Tier::kWm);
+  store_->setTier({1}, Tier::kLtm);
   auto location = store_->location(2);
   ASSERT_TRUE(location);
   EXPECT_EQ(location->weight, 5);
-  EXPECT_EQ(location->tier, Tier::kWM);
+  EXPECT_EQ(location->tier, Tier::kWm);
   EXPECT_EQ(location->created_frame, 2);
   EXPECT_EQ(location->session_id, session_);
   EXPECT_FALSE(store_->location(9));
@@ -137,12 +137,12 @@ TEST_F(Records, LocationsTiersAndCoverage) {
   const auto covered = store_->coveredFrames(std::vector<std::int64_t>{1, 2});
   EXPECT_EQ(covered.at(1), (std::vector<std::int64_t>{1}));
   EXPECT_EQ(covered.at(2).size(), 2u);
-  const auto wm = store_->locationsInTier(Tier::kWM);
+  const auto wm = store_->locationsInTier(Tier::kWm);
   ASSERT_EQ(wm.size(), 1u);
   EXPECT_EQ(wm[0].id, 2);
   EXPECT_EQ(wm[0].weight, 5);
-  EXPECT_EQ(store_->locationsInTier(Tier::kLTM).size(), 1u);
-  EXPECT_TRUE(store_->locationsInTier(Tier::kSTM).empty());
+  EXPECT_EQ(store_->locationsInTier(Tier::kLtm).size(), 1u);
+  EXPECT_TRUE(store_->locationsInTier(Tier::kStm).empty());
   EXPECT_THROW(store_->updateWeight(42, 1), Error);
 
   store_->deleteLocation(2);
@@ -157,8 +157,8 @@ TEST_F(Records, WordsAndReferences) {
   FrameRecord f = sampleFrame(0);
   f.id = 1;
   store_->insertFrame(f);
-  store_->insertLocation({1, session_, 0, Tier::kWM, 1});
-  store_->insertLocation({2, session_, 0, Tier::kWM, 1});
+  store_->insertLocation({1, session_, 0, Tier::kWm, 1});
+  store_->insertLocation({2, session_, 0, Tier::kWm, 1});
   std::vector<WordRecord> words;
   for (std::int64_t id = 1; id <= 5; ++id) {
     std::vector<float> values(64);
@@ -237,8 +237,8 @@ TEST_F(Records, BulkDescriptorAndSignatureLoads) {
     std::vector<float> wide(kDim + 1, 0.f);
     words.push_back(WordRecord::fromFloats(300, std::nullopt, wide.data(), kDim + 1));
     store_->insertWords(words);
-    store_->insertLocation({1, session_, 0, Tier::kWM, 1});
-    store_->insertLocation({2, session_, 0, Tier::kWM, 1});
+    store_->insertLocation({1, session_, 0, Tier::kWm, 1});
+    store_->insertLocation({2, session_, 0, Tier::kWm, 1});
     store_->insertWordRefs(1, {{7, 0, 0, 1, 0, 1}, {3, 0, 0, 1, 0, 1}, {7, 0, 0, 1, 0, 1}});
     store_->insertWordRefs(2, {{150, 0, 0, 1, 0, 1}});
     tx.commit();
@@ -285,7 +285,7 @@ TEST_F(Records, LinksStoredOncePerPairAndType) {
     return f;
   }());
   for (std::int64_t id = 1; id <= 4; ++id) {
-    store_->insertLocation({id, session_, 0, id == 3 ? Tier::kLTM : Tier::kWM, 1});
+    store_->insertLocation({id, session_, 0, id == 3 ? Tier::kLtm : Tier::kWm, 1});
   }
   store_->insertLink(2, 1, LinkType::kNeighbour, std::nullopt);
   store_->insertLink(1, 2, LinkType::kNeighbour, 0.5);  // same pair: updates the score
@@ -305,10 +305,10 @@ TEST_F(Records, LinksStoredOncePerPairAndType) {
   EXPECT_EQ(links[2].location_b, 3);
   EXPECT_FALSE(links[2].score);
   EXPECT_EQ(store_->links(1).size(), 2u);
-  EXPECT_EQ(store_->linkedInTier(2, Tier::kLTM), (std::vector<std::int64_t>{3}));
-  EXPECT_EQ(store_->linkedInTier(2, Tier::kWM), (std::vector<std::int64_t>{1, 4}));
-  EXPECT_EQ(store_->linkedInTier(2, Tier::kWM, LinkType::kMerge), (std::vector<std::int64_t>{4}));
-  EXPECT_TRUE(store_->linkedInTier(2, Tier::kLTM, LinkType::kLoopClosure).empty());
+  EXPECT_EQ(store_->linkedInTier(2, Tier::kLtm), (std::vector<std::int64_t>{3}));
+  EXPECT_EQ(store_->linkedInTier(2, Tier::kWm), (std::vector<std::int64_t>{1, 4}));
+  EXPECT_EQ(store_->linkedInTier(2, Tier::kWm, LinkType::kMerge), (std::vector<std::int64_t>{4}));
+  EXPECT_TRUE(store_->linkedInTier(2, Tier::kLtm, LinkType::kLoopClosure).empty());
 }
 
 TEST_F(Records, HypothesesStateAndVocabularyImports) {
@@ -318,7 +318,7 @@ TEST_F(Records, HypothesesStateAndVocabularyImports) {
     f.id = i;
     store_->insertFrame(f);
   }
-  store_->insertLocation({1, session_, 0, Tier::kWM, 1});
+  store_->insertLocation({1, session_, 0, Tier::kWm, 1});
   store_->insertHypothesis({1, std::nullopt, 0.3, 0.0, false, "below T_loop"});
   store_->insertHypothesis({2, std::int64_t{1}, 0.8, 0.75, true, ""});
   tx.commit();
@@ -396,7 +396,7 @@ TEST_F(Records, ForeignKeysAreEnforced) {
     f.id = 1;
     return f;
   }());
-  store_->insertLocation({1, session_, 0, Tier::kWM, 1});
+  store_->insertLocation({1, session_, 0, Tier::kWm, 1});
   try {
     store_->insertWordRefs(1, {{12345, 0, 0, 1, 0, 1}});
     FAIL() << "a reference to an unknown word was stored";
@@ -411,10 +411,10 @@ TEST_F(Records, ForeignKeysAreEnforced) {
 
   // Deferred keys (to frames) are checked at commit; the whole frame then vanishes.
   Transaction tx = store_->begin();
-  store_->insertLocation({2, session_, 0, Tier::kWM, 999});
+  store_->insertLocation({2, session_, 0, Tier::kWm, 999});
   EXPECT_THROW(tx.commit(), StorageError);
   EXPECT_FALSE(store_->location(2));
-  EXPECT_THROW(store_->insertLocation({3, 77, 0, Tier::kWM, std::nullopt}), StorageError);
+  EXPECT_THROW(store_->insertLocation({3, 77, 0, Tier::kWm, std::nullopt}), StorageError);
 }
 
 TEST_F(Records, TransactionRollsBackUnlessCommitted) {
@@ -494,7 +494,7 @@ TEST(ReadOnlyMedia, MapInReadOnlyFolderOpensForReadingOnly) {
   }
   std::filesystem::remove(path + "-lock");
   ASSERT_FALSE(std::filesystem::exists(path + "-wal"));
-  const std::string before = testing::fileBytes(path);
+  const std::string before = testing::readBytes(path);
   namespace fs = std::filesystem;
   fs::permissions(path, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
   fs::permissions(folder, fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
@@ -523,7 +523,7 @@ TEST(ReadOnlyMedia, MapInReadOnlyFolderOpensForReadingOnly) {
   fs::permissions(path, fs::perms::owner_write, fs::perm_options::add);
   EXPECT_EQ(status, 0) << "1 wrong content, 2 write accepted, 3/5 wrong error code, "
                           "4 read-write open accepted, 9x child setup";
-  EXPECT_EQ(testing::fileBytes(path), before);
+  EXPECT_EQ(testing::readBytes(path), before);
 }
 
 }  // namespace

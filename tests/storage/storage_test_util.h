@@ -1,23 +1,15 @@
 #pragma once
 // Helpers shared by the storage tests.
-#include <fstream>
-#include <iterator>
 #include <string>
 #include <vector>
 
+#include "file_bytes.h"
 #include "placedb/storage/map_store.h"
 
 namespace placedb::storage::testing {
 
-inline std::string fileBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-inline void writeBytes(const std::string& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
+using placedb::testing::readBytes;
+using placedb::testing::writeBytes;
 
 // Writes one complete frame (frame row, location, words, references) in one transaction.
 inline void writeFrame(MapStore& store, std::int64_t session_id, std::int64_t index,
@@ -30,7 +22,7 @@ inline void writeFrame(MapStore& store, std::int64_t session_id, std::int64_t in
   frame.source_path = "img" + std::to_string(index) + ".png";
   frame.location_id = index + 1;
   store.insertFrame(frame);
-  store.insertLocation({index + 1, session_id, 1, Tier::kSTM, frame.id});
+  store.insertLocation({index + 1, session_id, 1, Tier::kStm, frame.id});
   store.addCoveredFrame(index + 1, frame.id);
   std::vector<WordRecord> words;
   std::vector<WordRef> refs;

@@ -238,7 +238,7 @@ TEST(Options, ValidateRejectsOutOfRangeSettings) {
   };
   VocabularyOptions o;
   EXPECT_NO_THROW(o.validate());
-  o.t_nndr = 0;
+  o.t_nndr = -0.1f;
   expectInvalid(o);
   o = {};
   o.t_nd2 = 0.0001f;  // below t_nd1

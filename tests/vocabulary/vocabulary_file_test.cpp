@@ -8,6 +8,8 @@
 #include <random>
 #include <sstream>
 
+#include "error_code.h"
+#include "file_bytes.h"
 #include "placedb/error.h"
 #include "test_paths.h"
 #include "vocabulary/vocabulary_file.h"
@@ -17,14 +19,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string readBytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-void writeBytes(const fs::path& path, const std::string& bytes) {
-  std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
-}
+using placedb::testing::codeOf;
+using placedb::testing::readBytes;
+using placedb::testing::writeBytes;
 
 // A small vocabulary grown by quantisation, so ids, frames and settings are all non-trivial.
 VocabularyData sampleData(int dim = 8) {
@@ -43,18 +40,6 @@ VocabularyData sampleData(int dim = 8) {
   }
   v.erase({1, 2});
   return snapshotOf(v);
-}
-
-ErrorCode codeOf(const std::function<void()>& f, std::string* message = nullptr) {
-  try {
-    f();
-  } catch (const Error& e) {
-    if (message) *message = e.what();
-    return e.code();
-  } catch (...) {
-    return ErrorCode::kInternal;
-  }
-  return ErrorCode(0);
 }
 
 void expectSameData(const VocabularyData& a, const VocabularyData& b) {

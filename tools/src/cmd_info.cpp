@@ -19,11 +19,11 @@ namespace {
 
 const char* tierName(storage::Tier tier) {
   switch (tier) {
-    case storage::Tier::kSTM:
+    case storage::Tier::kStm:
       return "stm";
-    case storage::Tier::kWM:
+    case storage::Tier::kWm:
       return "wm";
-    case storage::Tier::kLTM:
+    case storage::Tier::kLtm:
       return "ltm";
   }
   return "?";
@@ -71,7 +71,7 @@ nlohmann::json inspectMap(const std::string& path) {
   std::map<std::int64_t, std::int64_t> session_of;
   nlohmann::json tiers;
   std::int64_t locations = 0;
-  for (auto tier : {storage::Tier::kSTM, storage::Tier::kWM, storage::Tier::kLTM}) {
+  for (auto tier : {storage::Tier::kStm, storage::Tier::kWm, storage::Tier::kLtm}) {
     auto in_tier = store.locationsInTier(tier);
     tiers[tierName(tier)] = in_tier.size();
     locations += static_cast<std::int64_t>(in_tier.size());

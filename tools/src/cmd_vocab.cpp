@@ -27,17 +27,18 @@ vocab::VocabularyData wordsOfMap(const std::string& map_path) {
   const auto imports = store.vocabularyImports();
   if (last) {
     data.settings = store.settings(last->id);
-    data.extractor = data.settings.count("extractor") ? data.settings.at("extractor") : "surf";
-    data.unit =
-        data.settings.count("distance_unit") && data.settings.at("distance_unit") == "euclidean"
-            ? vocab::DistanceUnit::kEuclidean
-            : vocab::DistanceUnit::kSquared;
+    // A setting absent from the table had its default when the session ran.
+    const auto setting = [&data](const char* key, const char* absent) {
+      const auto it = data.settings.find(key);
+      return it == data.settings.end() ? std::string(absent) : it->second;
+    };
+    data.extractor = setting("extractor", toString(Options().extractor));
+    data.unit = parseDistanceUnit(setting("distance_unit", toString(Options().distance_unit)));
   } else if (!imports.empty() && !imports.front().extractor.empty()) {
     // Only imported words: the file's own header again, so the export repeats it exactly.
     data.settings = imports.front().settings;
     data.extractor = imports.front().extractor;
-    data.unit = imports.front().distance_unit == "euclidean" ? vocab::DistanceUnit::kEuclidean
-                                                             : vocab::DistanceUnit::kSquared;
+    data.unit = parseDistanceUnit(imports.front().distance_unit);
   } else {
     throw Error(ErrorCode::kInvalidArgument,
                 fmt::format("map {} has no session and no imported vocabulary", map_path));
@@ -124,10 +125,10 @@ int runImport(const VocabRequest& request) {
   vocab::VocabularyData header;
   if (!request.text) header = vocab::readVocabularyFile(request.file, {"", 0, true});
   const std::string named =
-      request.text ? (request.extractor.empty() ? Options().extractor : request.extractor)
+      request.text ? (request.extractor.empty() ? toString(Options().extractor) : request.extractor)
                    : header.extractor;
-  options.extractor = named.substr(0, named.find('-'));
-  if (!request.extractor.empty() && request.extractor != options.extractor)
+  options.extractor = parseExtractor(named.substr(0, named.find('-')));
+  if (!request.extractor.empty() && request.extractor != toString(options.extractor))
     throw Error(ErrorCode::kVocabularyRefused,
                 fmt::format("vocabulary file {} refused: its words are {} descriptors, not {}",
                             request.file, named, request.extractor));
@@ -146,7 +147,7 @@ int runImport(const VocabRequest& request) {
   const std::string dimension =
       header.dim > 0 ? fmt::format(", dimension {}", header.dim) : std::string();
   std::fputs(fmt::format("placedb: imported {} words ({}{}) into {} as a {} vocabulary\n", words,
-                         options.extractor, dimension, request.map_path, request.mode)
+                         toString(options.extractor), dimension, request.map_path, request.mode)
                  .c_str(),
              stderr);
   return 0;

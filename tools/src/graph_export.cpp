@@ -16,11 +16,11 @@ namespace {
 
 const char* tierName(storage::Tier tier) {
   switch (tier) {
-    case storage::Tier::kSTM:
+    case storage::Tier::kStm:
       return "stm";
-    case storage::Tier::kWM:
+    case storage::Tier::kWm:
       return "wm";
-    case storage::Tier::kLTM:
+    case storage::Tier::kLtm:
       return "ltm";
   }
   return "?";
@@ -162,7 +162,7 @@ MapGraph readMapGraph(const std::string& map_path) {
     for (const auto& f : store.frames(s.id)) frame_of[f.id] = {f.session_id, f.source_index};
 
   MapGraph graph;
-  for (auto tier : {storage::Tier::kSTM, storage::Tier::kWM, storage::Tier::kLTM})
+  for (auto tier : {storage::Tier::kStm, storage::Tier::kWm, storage::Tier::kLtm})
     for (const auto& l : store.locationsInTier(tier)) {
       GraphLocation location;
       location.id = l.id;

@@ -20,6 +20,7 @@
 
 #include "placedb/error.h"
 #include "placedb/options.h"
+#include "placedb/storage/records.h"
 
 namespace placedb {
 
@@ -79,7 +80,7 @@ struct SessionInfo {
 };
 
 // Where a location sits: short-term or working memory (RAM and file) or long-term memory (file).
-enum class Tier : std::uint8_t { kStm = 0, kWm = 1, kLtm = 2 };
+using Tier = storage::Tier;
 
 struct QueryMatch {  // localisation: a stored location that resembles the query image
   std::int64_t location_id = 0;

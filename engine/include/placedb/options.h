@@ -2,27 +2,59 @@
 // Every setting of the engine, typed, with its published or measured default.
 // The same settings travel as text (`--set key=value`, config files, the map's settings table):
 // Options::fromSettings() validates them, Options::toSettings() writes them back.
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
 
 namespace placedb {
 
+// The choices among settings. Their text forms (toString) are what `--set`, config files and the
+// map's settings table hold; parsing is strict: any other text is refused, never defaulted.
+enum class Extractor : std::uint8_t { kSurf, kSift, kKaze };
+enum class WordRule : std::uint8_t { kGreedy = 0, kNndr = 1 };
+enum class DistanceUnit : std::uint8_t { kSquared = 0, kEuclidean = 1 };
+enum class DecisionRule : std::uint8_t {
+  kRtabmap,  // accept when 1 - p(new) >= t_loop, unless the ratio test fails (RTAB-Map 2013)
+  kPaper,    // accept when p(new) < t_loop (paper 000's wording), no ratio test
+};
+
+// How the epipolar check decides (engine/src/engine/geometric_check.h).
+enum class GeometryRule : std::uint8_t {
+  kInliers,  // the most pairs one model puts within geometry_max_error_px >= min_inliers
+  kNfa,      // a contrario: NFA <= geometry_max_nfa and enough overlap
+  kEither,   // either of the two
+};
+
+const char* toString(Extractor extractor);  // "surf", "sift", "kaze"
+const char* toString(WordRule rule);        // "greedy", "nndr"
+const char* toString(DistanceUnit unit);    // "squared", "euclidean"
+const char* toString(DecisionRule rule);    // "rtabmap", "paper"
+const char* toString(GeometryRule rule);    // "inliers", "nfa", "either"
+// Throw placedb::Error(kInvalidArgument) naming `key`, the text and the valid names.
+Extractor parseExtractor(const std::string& text, const std::string& key = "extractor");
+WordRule parseWordRule(const std::string& text, const std::string& key = "word_rule");
+DistanceUnit parseDistanceUnit(const std::string& text, const std::string& key = "distance_unit");
+DecisionRule parseDecisionRule(const std::string& text, const std::string& key = "decision_rule");
+GeometryRule parseGeometryRule(const std::string& text, const std::string& key = "geometry_rule");
+
+// Every component (features, vocabulary, filter, memory tiers, geometric check) takes its
+// settings from here through engine/option_mapping; their own structs default to these values.
 struct Options {
   // --- features (SPEC §1) ---
-  std::string extractor = "surf";      // surf | sift | kaze
-  double hessian_threshold = 60;       // SURF fast-Hessian threshold (150 before bench/quality)
-  int octaves = 4;                     // SURF octaves
-  int intervals = 2;                   // SURF intervals (layers) per octave
-  bool upright = false;                // U-SURF: no orientation
-  int max_features = 600;              // strongest kept; 0 keeps all
-  double min_response = 0;             // features under this response are dropped
-  double bad_ratio = 0.25;             // fewer features than this x running mean: a bad frame
+  Extractor extractor = Extractor::kSurf;
+  double hessian_threshold = 60;  // SURF fast-Hessian threshold (measured, bench/quality)
+  int octaves = 4;                // SURF octaves
+  int intervals = 2;              // SURF intervals (layers) per octave
+  bool upright = false;           // U-SURF: no orientation
+  int max_features = 600;         // strongest kept; 0 keeps all
+  double min_response = 0;        // features under this response are dropped
+  double bad_ratio = 0.25;        // fewer features than this x running mean: a bad frame
 
   // --- vocabulary (SPEC §2) ---
-  std::string word_rule = "greedy";    // greedy | nndr
-  std::string distance_unit = "squared";  // squared | euclidean: unit of t_nd1, t_nd2 and the ratio
-  double t_nndr = 0.9;                 // paper 0.8; 0.9 measured better (bench/quality)
+  WordRule word_rule = WordRule::kGreedy;
+  DistanceUnit distance_unit = DistanceUnit::kSquared;  // unit of t_nd1, t_nd2 and the ratio
+  double t_nndr = 0.9;  // paper 0.8; 0.9 measured better (bench/quality)
   double t_nd1 = 0.001;
   double t_nd2 = 0.08;
   int kd_trees = 4;
@@ -43,10 +75,10 @@ struct Options {
   double wm_recent_ratio = 0.2;        // ... or this share of WM, whichever is more
 
   // --- Bayes filter and decision (SPEC §6) ---
-  double t_loop = 0.03;                // paper 0.11; the geometric check guards acceptance
-  std::string decision_rule = "rtabmap";  // rtabmap (score >= t_loop and ratio test) | paper
-  double loop_ratio = 0;               // rtabmap rule: reject when score < ratio x previous score
-                                       // (RTAB-Map 2013: 0.9; 0 = off, the geometric check replaces it)
+  double t_loop = 0.03;  // paper 0.11; the geometric check guards acceptance
+  DecisionRule decision_rule = DecisionRule::kRtabmap;
+  double loop_ratio = 0;  // rtabmap rule: reject when score < ratio x previous score
+                          // (RTAB-Map 2013: 0.9; 0 = off, the geometric check replaces it)
   double prediction_sigma = 1.6;
   int prediction_links = 16;
 
@@ -54,7 +86,7 @@ struct Options {
   int hypothesis_radius = 3;           // WM locations this many links from the filter's best
                                        // hypothesis compete with it; the check picks among them
   int hypothesis_top_similar = 5;      // ... and so do this many most similar WM locations
-  std::string geometry_rule = "either";  // inliers | nfa | either: how the epipolar check
+  GeometryRule geometry_rule = GeometryRule::kEither;  // how the epipolar check
                                        // decides (geometric_check.h)
   int geometry_min_inliers = 13;       // inliers rule: pairs one fundamental matrix must put
                                        // within geometry_max_error_px; 0 = no check
@@ -90,8 +122,12 @@ struct Options {
   struct SettingInfo {
     std::string key;
     std::string default_value;
-    std::string valid;        // "0..1", "greedy|nndr", ...
+    std::string valid;  // "0..1", "greedy|nndr", ...
     std::string description;
+    // Numeric settings: the accepted closed range (an open end is the nearest value inside);
+    // min > max for choices and booleans.
+    double min = 1;
+    double max = 0;
   };
   static std::vector<SettingInfo> catalogue();
 

@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -15,13 +16,41 @@
 namespace placedb {
 namespace {
 
+template <typename Enum, std::size_t N>
+Enum parseName(const std::array<const char*, N>& names, const std::string& text,
+               const std::string& key) {
+  std::string valid;
+  for (std::size_t i = 0; i < N; ++i) {
+    if (text == names[i]) return static_cast<Enum>(i);
+    valid += (i ? "|" : "") + std::string(names[i]);
+  }
+  throw Error(ErrorCode::kInvalidArgument,
+              fmt::format("setting {}={} is out of range: valid values are {}", key, text, valid));
+}
+
+constexpr const char* kNotAChoice = "invalid";
+
+template <typename Enum, std::size_t N>
+const char* nameOf(const std::array<const char*, N>& names, Enum value) {
+  const auto i = static_cast<std::size_t>(value);
+  return i < N ? names[i] : kNotAChoice;
+}
+
+// Indexed by the enum's value.
+constexpr std::array<const char*, 3> kExtractorNames = {"surf", "sift", "kaze"};
+constexpr std::array<const char*, 2> kWordRuleNames = {"greedy", "nndr"};
+constexpr std::array<const char*, 2> kDistanceUnitNames = {"squared", "euclidean"};
+constexpr std::array<const char*, 2> kDecisionRuleNames = {"rtabmap", "paper"};
+constexpr std::array<const char*, 3> kGeometryRuleNames = {"inliers", "nfa", "either"};
+
 struct Row {
   const char* key;
   const char* valid;
   const char* description;
+  double min = 1, max = 0;  // numeric rows: the closed range `ok` checks
   std::function<std::string(const Options&)> get;
   std::function<void(Options&, const std::string&)> set;  // throws with the reason
-  std::function<bool(const Options&)> ok;                // range check on the typed value
+  std::function<bool(const Options&)> ok;                 // range check on the typed value
 };
 
 [[noreturn]] void refuse(const std::string& key, const std::string& value, const char* valid) {
@@ -62,62 +91,79 @@ std::string formatDouble(double v) { return fmt::format("{}", v); }
 // Row builders keep the table below one line of intent per setting.
 Row real(const char* key, double Options::*m, double lo, double hi, const char* valid,
          const char* description) {
-  return {key, valid, description, [m](const Options& o) { return formatDouble(o.*m); },
+  return {key,
+          valid,
+          description,
+          lo,
+          hi,
+          [m](const Options& o) { return formatDouble(o.*m); },
           [m, key, valid](Options& o, const std::string& t) { o.*m = parseDouble(key, t, valid); },
           [m, lo, hi](const Options& o) { return o.*m >= lo && o.*m <= hi; }};
 }
 
 Row integer(const char* key, int Options::*m, int lo, int hi, const char* valid,
             const char* description) {
-  return {key, valid, description, [m](const Options& o) { return std::to_string(o.*m); },
+  return {key,
+          valid,
+          description,
+          static_cast<double>(lo),
+          static_cast<double>(hi),
+          [m](const Options& o) { return std::to_string(o.*m); },
           [m, key, valid](Options& o, const std::string& t) { o.*m = parseInt(key, t, valid); },
           [m, lo, hi](const Options& o) { return o.*m >= lo && o.*m <= hi; }};
 }
 
 Row boolean(const char* key, bool Options::*m, const char* description) {
-  return {key, "true|false", description,
+  return {key,
+          "true|false",
+          description,
+          1,
+          0,
           [m](const Options& o) { return std::string(o.*m ? "true" : "false"); },
           [m, key](Options& o, const std::string& t) { o.*m = parseBool(key, t); },
           [](const Options&) { return true; }};
 }
 
-Row choice(const char* key, std::string Options::*m, std::vector<std::string> values,
+// A choice's text is parsed strictly by `parse`; `ok` only catches a value cast from a number.
+template <typename Enum>
+Row choice(const char* key, Enum Options::*m, Enum (*parse)(const std::string&, const std::string&),
            const char* valid, const char* description) {
-  auto allowed = [values](const std::string& v) {
-    for (const auto& a : values)
-      if (a == v) return true;
-    return false;
-  };
-  return {key, valid, description, [m](const Options& o) { return o.*m; },
-          [m](Options& o, const std::string& t) { o.*m = t; },
-          [m, allowed](const Options& o) { return allowed(o.*m); }};
+  return {key,
+          valid,
+          description,
+          1,
+          0,
+          [m](const Options& o) { return std::string(toString(o.*m)); },
+          [m, parse, key](Options& o, const std::string& t) { o.*m = parse(t, key); },
+          [m](const Options& o) { return toString(o.*m) != std::string(kNotAChoice); }};
 }
 
 const std::vector<Row>& table() {
-  constexpr double kInf = std::numeric_limits<double>::infinity();
+  // Ranges are those the components accept (options_test holds them to it); an open end is
+  // written as the nearest value inside.
+  const double kBelowOne = std::nextafter(1.0, 0.0);
   static const std::vector<Row> rows = {
-      choice("extractor", &Options::extractor, {"surf", "sift", "kaze"}, "surf|sift|kaze",
+      choice("extractor", &Options::extractor, parseExtractor, "surf|sift|kaze",
              "feature extractor; a map keeps the one it was made with"),
-      real("hessian_threshold", &Options::hessian_threshold, 0, kInf, ">= 0",
+      real("hessian_threshold", &Options::hessian_threshold, 0, 1e12, "0..1e12",
            "SURF fast-Hessian threshold: lower finds more, weaker features"),
       integer("octaves", &Options::octaves, 1, 8, "1..8", "SURF octaves"),
       integer("intervals", &Options::intervals, 1, 8, "1..8", "SURF intervals per octave"),
       boolean("upright", &Options::upright, "U-SURF: skip orientation (camera never rolls)"),
       integer("max_features", &Options::max_features, 0, 100000, "0..100000",
               "strongest features kept per image, 0 = all"),
-      real("min_response", &Options::min_response, 0, kInf, ">= 0",
+      real("min_response", &Options::min_response, 0, 1e30, "0..1e30",
            "features with a weaker detector response are dropped"),
       real("bad_ratio", &Options::bad_ratio, 0, 1, "0..1",
            "an image with fewer features than this x the running mean is bad (never a location)"),
-      choice("word_rule", &Options::word_rule, {"greedy", "nndr"}, "greedy|nndr",
+      choice("word_rule", &Options::word_rule, parseWordRule, "greedy|nndr",
              "word creation rule: greedy (paper 000, algorithm 3) or NNDR (algorithms 1-2)"),
-      choice("distance_unit", &Options::distance_unit, {"squared", "euclidean"},
-             "squared|euclidean",
+      choice("distance_unit", &Options::distance_unit, parseDistanceUnit, "squared|euclidean",
              "unit of t_nd1, t_nd2 and the ratio test (RTAB-Map's is squared)"),
       real("t_nndr", &Options::t_nndr, 0, 1, "0..1", "nearest/second-nearest ratio threshold"),
-      real("t_nd1", &Options::t_nd1, 0, kInf, ">= 0",
+      real("t_nd1", &Options::t_nd1, 0, 1e30, "0..1e30",
            "greedy: below this ND a feature takes its word"),
-      real("t_nd2", &Options::t_nd2, 0, kInf, ">= 0",
+      real("t_nd2", &Options::t_nd2, 0, 1e30, "0..1e30",
            "greedy: above this ND a feature makes a word"),
       integer("kd_trees", &Options::kd_trees, 1, 64, "1..64",
               "randomized kd-trees of the word index"),
@@ -129,7 +175,7 @@ const std::vector<Row>& table() {
            "merge a new location into the previous one above this similarity"),
       integer("wm_max", &Options::wm_max, 0, 100000000, "0..1e8",
               "working-memory size that triggers transfer to LTM, 0 = unbounded"),
-      real("t_time_ms", &Options::t_time_ms, 0, kInf, ">= 0",
+      real("t_time_ms", &Options::t_time_ms, 0, 1e9, "0..1e9",
            "time budget in ms of the stages that grow with memory (LTM search, likelihood, "
            "filter update, retrieval; not features nor verification): above it WM locations "
            "move to LTM, 0 = off"),
@@ -142,12 +188,10 @@ const std::vector<Row>& table() {
               "back before the filter runs, 0 = off"),
       integer("wm_immune_newest", &Options::wm_immune_newest, 0, 100000, "0..100000",
               "newest WM locations never transferred (at least)"),
-      // 1 would make all of WM immune: memory management could never transfer a location.
-      real("wm_recent_ratio", &Options::wm_recent_ratio, 0, std::nextafter(1.0, 0.0),
-           "0 <= x < 1",
+      real("wm_recent_ratio", &Options::wm_recent_ratio, 0, kBelowOne, "0..1, 1 excluded",
            "share of WM, the newest, never transferred (RTAB-Map's Mem/RecentWmRatio)"),
       real("t_loop", &Options::t_loop, 0, 1, "0..1", "loop-closure acceptance threshold"),
-      choice("decision_rule", &Options::decision_rule, {"rtabmap", "paper"}, "rtabmap|paper",
+      choice("decision_rule", &Options::decision_rule, parseDecisionRule, "rtabmap|paper",
              "rtabmap: 1-p(new) >= t_loop and ratio test; paper: p(new) < t_loop"),
       real("loop_ratio", &Options::loop_ratio, 0, 1, "0..1",
            "rtabmap rule: reject when the score falls under this x the previous frame's"),
@@ -160,7 +204,7 @@ const std::vector<Row>& table() {
               "it in the geometric check (0 = the best hypothesis alone)"),
       integer("hypothesis_top_similar", &Options::hypothesis_top_similar, 0, 1000, "0..1000",
               "this many most similar WM locations also compete with the filter's best hypothesis"),
-      choice("geometry_rule", &Options::geometry_rule, {"inliers", "nfa", "either"},
+      choice("geometry_rule", &Options::geometry_rule, parseGeometryRule,
              "inliers|nfa|either",
              "how the geometric check decides: inliers (geometry_min_inliers pairs within "
              "geometry_max_error_px of one fundamental matrix), nfa (a contrario: "
@@ -211,6 +255,28 @@ std::string knownKeys() {
 
 }  // namespace
 
+const char* toString(Extractor extractor) { return nameOf(kExtractorNames, extractor); }
+const char* toString(WordRule rule) { return nameOf(kWordRuleNames, rule); }
+const char* toString(DistanceUnit unit) { return nameOf(kDistanceUnitNames, unit); }
+const char* toString(DecisionRule rule) { return nameOf(kDecisionRuleNames, rule); }
+const char* toString(GeometryRule rule) { return nameOf(kGeometryRuleNames, rule); }
+
+Extractor parseExtractor(const std::string& text, const std::string& key) {
+  return parseName<Extractor>(kExtractorNames, text, key);
+}
+WordRule parseWordRule(const std::string& text, const std::string& key) {
+  return parseName<WordRule>(kWordRuleNames, text, key);
+}
+DistanceUnit parseDistanceUnit(const std::string& text, const std::string& key) {
+  return parseName<DistanceUnit>(kDistanceUnitNames, text, key);
+}
+DecisionRule parseDecisionRule(const std::string& text, const std::string& key) {
+  return parseName<DecisionRule>(kDecisionRuleNames, text, key);
+}
+GeometryRule parseGeometryRule(const std::string& text, const std::string& key) {
+  return parseName<GeometryRule>(kGeometryRuleNames, text, key);
+}
+
 Options Options::fromSettings(const std::map<std::string, std::string>& settings,
                               const Options& base) {
   Options o = base;
@@ -251,7 +317,7 @@ Options Options::paperPreset() {
   o.t_nd1 = 0.001;
   o.t_nd2 = 0.08;
   o.t_time_ms = 700;
-  o.decision_rule = "paper";
+  o.decision_rule = DecisionRule::kPaper;
   o.loop_ratio = 0.9;
   // The papers verify nothing: their hypothesis is the filter's best location, as it stands.
   o.hypothesis_radius = 0;
@@ -266,7 +332,8 @@ Options Options::paperPreset() {
 std::vector<Options::SettingInfo> Options::catalogue() {
   std::vector<SettingInfo> out;
   Options defaults;
-  for (const auto& r : table()) out.push_back({r.key, r.get(defaults), r.valid, r.description});
+  for (const auto& r : table())
+    out.push_back({r.key, r.get(defaults), r.valid, r.description, r.min, r.max});
   return out;
 }
 

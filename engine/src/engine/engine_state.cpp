@@ -5,16 +5,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include "engine/state_keys.h"
 #include "placedb/error.h"
 
 namespace placedb {
 namespace {
 
-constexpr const char* kCountersKey = "engine.counters";
-constexpr const char* kVocabularyHeaderKey = "vocabulary.header";
 constexpr std::size_t kSplitBytes = 1 + 4 + 2 + 4;  // a split-log record
-
-std::string chunkKey(std::size_t chunk) { return fmt::format("vocabulary.splits.{:06}", chunk); }
 
 }  // namespace
 
@@ -78,7 +75,8 @@ void VocabularyStateWriter::save(storage::MapStore& store, vocab::Vocabulary& vo
     for (const auto& [tree, node] : changes_.deletions) deletions_.emplace_back(tree, node);
     store.writeKdNodes(upserts_, deletions_, changes_.full);
   }
-  for (std::size_t chunk = 0; chunk < legacy_chunks_; ++chunk) store.deleteState(chunkKey(chunk));
+  for (std::size_t chunk = 0; chunk < legacy_chunks_; ++chunk)
+    store.deleteState(vocabularySplitsKey(chunk));
   legacy_chunks_ = 0;
 }
 
@@ -94,7 +92,7 @@ std::optional<vocab::IndexState> VocabularyStateWriter::load(const storage::MapS
   saved_next_word_id_ = state.next_word_id;
   legacy_chunks_ = 0;
   for (std::size_t chunk = 0;; ++chunk) {
-    auto bytes = store.getState(chunkKey(chunk));
+    auto bytes = store.getState(vocabularySplitsKey(chunk));
     if (!bytes) break;
     if (bytes->size() > kSplitsPerChunk * kSplitBytes ||
         !vocab::appendSplitRecords(bytes->data(), bytes->size(), &state.legacy_splits))

@@ -37,22 +37,19 @@
 
 #include <opencv2/core.hpp>
 
+#include "placedb/options.h"
+
 namespace placedb {
 
-enum class GeometryRule {
-  kInliers,  // the most pairs one model puts within max_error_px >= min_inliers
-  kNfa,      // NFA <= max_nfa and inliers >= min_overlap x keypoints (above)
-  kEither,   // either of the two (the default)
-};
-
+// Defaults are Options' (geometry_rule, geometry_min_inliers, geometry_max_nfa, ...).
 struct GeometricCheckSettings {
-  GeometryRule rule = GeometryRule::kInliers;  // the engine's default is kEither (options.h)
-  int min_inliers = 13;       // inliers rule: pairs within max_error_px of one model
-  double max_nfa = 1.0;       // nfa rule: expected false alarms at most
-  double min_overlap = 0.05;  // nfa rule: and inliers at least this share of the keypoints
-  double max_error_px = 3.0;  // distances from the epipolar lines above this never agree
-  double match_ratio = 0.8;   // nearest / second-nearest descriptor distance for a match
-  int iterations = 400;       // RANSAC samples at most, per set of correspondences
+  GeometryRule rule = Options().geometry_rule;
+  int min_inliers = Options().geometry_min_inliers;     // inliers rule: pairs within max_error_px
+  double max_nfa = Options().geometry_max_nfa;          // nfa rule: expected false alarms at most
+  double min_overlap = Options().geometry_min_overlap;  // nfa rule: inliers / keypoints at least
+  double max_error_px = Options().geometry_max_error_px;  // farther from the epipolar line: out
+  double match_ratio = Options().geometry_match_ratio;  // nearest / second-nearest distance
+  int iterations = 400;  // RANSAC samples at most, per set of correspondences
 };
 
 struct GeometricResult {

@@ -10,6 +10,7 @@
 #include "engine/engine_state.h"
 #include "engine/geometric_check.h"
 #include "engine/keypoint_cache.h"
+#include "engine/state_keys.h"
 #include "features/feature_extractor.h"
 #include "filter/bayes_filter.h"
 #include "filter/inverted_index.h"
@@ -22,15 +23,6 @@
 #include "vocabulary/vocabulary.h"
 
 namespace placedb {
-
-// Engine-state key of a location's own keypoint descriptors (see encodeDescriptors).
-std::string keypointDescriptorsKey(std::int64_t location_id);
-// Engine-state keys: the extractor signature a map was made with, and its imported vocabulary's
-// mode ("fixed" or "seed"; absent without an import).
-inline constexpr const char* kMapExtractorKey = "map.extractor";
-inline constexpr const char* kVocabularyModeKey = "vocabulary.mode";
-// Engine-state key of the place codes' coarse centres (memory/place_code.h).
-inline constexpr const char* kPlaceCoderKey = "place_codes.centres";
 
 class MapImpl final : public Map {
  public:

@@ -26,7 +26,7 @@ std::string fileChecksum(const std::string& path) {
 // The file names its extractor either as a setting ("surf", CLI exports) or by signature
 // ("surf-64", engine snapshots).
 bool sameExtractor(const std::string& named, const Options& options, const std::string& signature) {
-  return named == options.extractor || named == signature;
+  return named == toString(options.extractor) || named == signature;
 }
 
 }  // namespace
@@ -46,7 +46,7 @@ std::size_t MapImpl::importVocabulary(const std::string& file, bool text, Vocabu
   // Everything the file says is checked before the map is touched.
   vocab::VocabularyData data = text ? vocab::readVocabularyText(file, extractor_->dim())
                                     : vocab::readVocabularyFile(file, {"", extractor_->dim()});
-  if (text) data.extractor = options_.extractor;
+  if (text) data.extractor = toString(options_.extractor);
   if (!sameExtractor(data.extractor, options_, extractor_->signature()))
     throw Error(ErrorCode::kVocabularyRefused,
                 fmt::format("vocabulary file {} refused: its words are {} descriptors, the map "
@@ -67,7 +67,7 @@ std::size_t MapImpl::importVocabulary(const std::string& file, bool text, Vocabu
     record.mode = mode == VocabularyMode::kFixed ? storage::VocabularyMode::kFixed
                                                  : storage::VocabularyMode::kSeed;
     record.extractor = data.extractor;
-    record.distance_unit = data.unit == vocab::DistanceUnit::kEuclidean ? "euclidean" : "squared";
+    record.distance_unit = toString(data.unit);
     record.settings = data.settings;
     const std::int64_t import_id = store_->recordVocabularyImport(record);
 

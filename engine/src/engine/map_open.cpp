@@ -52,11 +52,11 @@ void MapImpl::configure(const Options& options) {
   extractor_ = makeFeatureExtractor(toFeatureOptions(options));
   if (auto made_with = store_->getStateText(kMapExtractorKey);
       made_with && *made_with != extractor_->signature())
-    throw Error(
-        ErrorCode::kInvalidArgument,
-        fmt::format("{} was made with {} features; extractor={} gives {}: mixing them is "
-                    "refused (use a new map)",
-                    store_->path(), *made_with, options.extractor, extractor_->signature()));
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("{} was made with {} features; extractor={} gives {}: mixing them is "
+                            "refused (use a new map)",
+                            store_->path(), *made_with, toString(options.extractor),
+                            extractor_->signature()));
   auto vocabulary_options = toVocabularyOptions(options);
   vocabulary_options.fixed = vocabulary_options.fixed || mode_ == Mode::kLocalisation ||
                              store_->getStateText(kVocabularyModeKey) == std::string("fixed");
@@ -78,12 +78,9 @@ void MapImpl::restoreFromStore() {
   MemorySnapshot snapshot;
   snapshot.next_age = counters_.next_wm_age;
   const auto ages = store_->wmAges();
-  const std::pair<storage::Tier, Tier> tiers[] = {{storage::Tier::kSTM, Tier::kStm},
-                                                  {storage::Tier::kWM, Tier::kWm},
-                                                  {storage::Tier::kLTM, Tier::kLtm}};
   std::vector<std::int64_t> live;  // STM and WM
-  for (auto [stored, tier] : tiers) {
-    for (const auto& row : store_->locationsInTier(stored)) {
+  for (Tier tier : {Tier::kStm, Tier::kWm, Tier::kLtm}) {
+    for (const auto& row : store_->locationsInTier(tier)) {
       const auto age = ages.find(row.id);
       snapshot.locations.push_back(
           {row.id, tier, row.weight, age == ages.end() ? row.id : age->second});
@@ -229,7 +226,7 @@ SessionInfo MapImpl::beginSession(const std::string& source, const std::string& 
       if (r.tier == Tier::kStm) r.tier = Tier::kWm;
     snap.stm.clear();
     tiers_->restore(snap);
-    store_->setTier(stm, storage::Tier::kWM);
+    store_->setTier(stm, storage::Tier::kWm);
   }
   counters_.last_location = 0;
   counters_.last_session = id;
@@ -294,8 +291,8 @@ std::string MapImpl::checkConsistency() const {
   for (std::int64_t id : live) {
     auto stored = store_->location(id);
     if (!stored) return fmt::format("location {} is not in the file", id);
-    auto expected = tiers_->tierOf(id) == Tier::kStm ? storage::Tier::kSTM : storage::Tier::kWM;
-    if (stored->tier != expected) return fmt::format("location {} has another tier on file", id);
+    if (stored->tier != tiers_->tierOf(id))
+      return fmt::format("location {} has another tier on file", id);
   }
   return {};
 }

@@ -181,7 +181,7 @@ void MapImpl::placeInShortTermMemory(const Features& features, const Quantised& 
       w.links.push_back(link(previous, r.location_id, storage::LinkType::kNeighbour));
     }
     w.new_location =
-        storage::LocationRecord{r.location_id, *session_id_, 0, storage::Tier::kSTM, r.frame_id};
+        storage::LocationRecord{r.location_id, *session_id_, 0, storage::Tier::kStm, r.frame_id};
     w.refs.reserve(features.size());
     cv::Mat kept;
     for (std::size_t i = 0; i < features.size(); ++i) {
@@ -279,10 +279,10 @@ void MapImpl::enterWorkingMemory(const std::vector<std::int64_t>& ids, FrameWrit
 void MapImpl::retrieveNeighbours(std::int64_t hypothesis, FrameWrite& write, FrameResult& result) {
   if (options_.max_retrieved <= 0 || tiers_->ltmSize() == 0) return;
   // Nearest first: the hypothesis' own LTM links, then those of its live neighbours.
-  std::vector<std::int64_t> candidates = store_->linkedInTier(hypothesis, storage::Tier::kLTM);
+  std::vector<std::int64_t> candidates = store_->linkedInTier(hypothesis, storage::Tier::kLtm);
   for (std::int64_t n : graph_.neighbours(hypothesis)) {
     if (candidates.size() >= static_cast<std::size_t>(options_.max_retrieved)) break;
-    auto more = store_->linkedInTier(n, storage::Tier::kLTM);
+    auto more = store_->linkedInTier(n, storage::Tier::kLtm);
     candidates.insert(candidates.end(), more.begin(), more.end());
   }
   bringBack(tiers_->retrievalCandidates(hypothesis, candidates), write, result);
@@ -420,8 +420,8 @@ void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_pa
     if (w.frame.location_id) store_->addCoveredFrame(*w.frame.location_id, r.frame_id);
     if (w.weight) store_->updateWeight(w.weight->first, w.weight->second);
     for (const auto& l : w.links) store_->insertLink(l.location_a, l.location_b, l.type, l.score);
-    if (!w.to_wm.empty()) store_->setTier(w.to_wm, storage::Tier::kWM);
-    if (!w.to_ltm.empty()) store_->setTier(w.to_ltm, storage::Tier::kLTM);
+    if (!w.to_wm.empty()) store_->setTier(w.to_wm, storage::Tier::kWm);
+    if (!w.to_ltm.empty()) store_->setTier(w.to_ltm, storage::Tier::kLtm);
     if (!w.ages.empty()) store_->setWmAges(w.ages);
     if (!w.place_coder.empty()) store_->putState(kPlaceCoderKey, w.place_coder);
     if (w.hypothesis) store_->insertHypothesis(*w.hypothesis);

@@ -4,7 +4,7 @@ namespace placedb {
 
 FeatureOptions toFeatureOptions(const Options& o) {
   FeatureOptions f;
-  f.extractor = o.extractor;
+  f.extractor = toString(o.extractor);
   f.hessian_threshold = o.hessian_threshold;
   f.octaves = o.octaves;
   f.intervals = o.intervals;
@@ -17,9 +17,8 @@ FeatureOptions toFeatureOptions(const Options& o) {
 
 vocab::VocabularyOptions toVocabularyOptions(const Options& o) {
   vocab::VocabularyOptions v;
-  v.rule = o.word_rule == "nndr" ? vocab::WordRule::kNndr : vocab::WordRule::kGreedy;
-  v.unit = o.distance_unit == "euclidean" ? vocab::DistanceUnit::kEuclidean
-                                          : vocab::DistanceUnit::kSquared;
+  v.rule = o.word_rule;
+  v.unit = o.distance_unit;
   v.t_nndr = static_cast<float>(o.t_nndr);
   v.t_nd1 = static_cast<float>(o.t_nd1);
   v.t_nd2 = static_cast<float>(o.t_nd2);
@@ -30,10 +29,10 @@ vocab::VocabularyOptions toVocabularyOptions(const Options& o) {
 
 BayesFilterSettings toFilterSettings(const Options& o) {
   BayesFilterSettings s;
-  s.gaussian_sigma = o.prediction_sigma;
-  s.neighbourhood_links = o.prediction_links;
-  s.rule = o.decision_rule == "paper" ? DecisionRule::kPaper000 : DecisionRule::kRtabmap;
-  s.loop_threshold = o.t_loop;
+  s.prediction_sigma = o.prediction_sigma;
+  s.prediction_links = o.prediction_links;
+  s.rule = o.decision_rule;
+  s.t_loop = o.t_loop;
   s.loop_ratio = o.loop_ratio;
   return s;
 }
@@ -52,9 +51,7 @@ MemorySettings toMemorySettings(const Options& o) {
 
 GeometricCheckSettings toGeometricCheckSettings(const Options& o) {
   GeometricCheckSettings g;
-  g.rule = o.geometry_rule == "nfa"      ? GeometryRule::kNfa
-           : o.geometry_rule == "either" ? GeometryRule::kEither
-                                         : GeometryRule::kInliers;
+  g.rule = o.geometry_rule;
   g.max_nfa = o.geometry_max_nfa;
   g.min_inliers = o.geometry_min_inliers;
   g.min_overlap = o.geometry_min_overlap;
@@ -64,8 +61,8 @@ GeometricCheckSettings toGeometricCheckSettings(const Options& o) {
 }
 
 bool geometricCheckOn(const Options& o) {
-  const bool count = o.geometry_rule != "nfa" && o.geometry_min_inliers > 0;
-  const bool chance = o.geometry_rule != "inliers" && o.geometry_max_nfa > 0;
+  const bool count = o.geometry_rule != GeometryRule::kNfa && o.geometry_min_inliers > 0;
+  const bool chance = o.geometry_rule != GeometryRule::kInliers && o.geometry_max_nfa > 0;
   return count || chance;
 }
 

@@ -3,40 +3,42 @@
 #include <string>
 #include <vector>
 
+#include "placedb/options.h"
+
 namespace placedb {
 
-// Defaults follow RTAB-Map's SURF defaults (SURF/HessianThreshold 500, SURF/Octaves 4,
-// SURF/OctaveLayers 2, SURF/Upright false, SURF/Extended false) so that its published settings
-// can be carried over. They are meant to be tuned on real loop-closure data.
+// The settings a user can set (extractor, hessian_threshold, octaves, intervals, upright,
+// max_features, min_response) default to Options (placedb/options.h), which took them from
+// RTAB-Map's SURF defaults and tuned the threshold and cap on real loop-closure data.
 struct FeatureOptions {
   // "surf" (ours, 64-d float), "sift" (OpenCV, 128-d float), "kaze" (OpenCV, 64-d float) or
   // "orb" (OpenCV, 32-byte binary; refused for mapping, see makeFeatureExtractor()).
-  std::string extractor = "surf";
+  std::string extractor = toString(Options().extractor);
 
   // SURF: minimum determinant of the box-filter Hessian for a blob to be kept. The responses are
   // scaled exactly as OpenCV's SURF (intensities 0..255, each box normalised by its own area),
-  // so a threshold here means what it means in OpenCV/RTAB-Map. Range: >= 0, finite.
-  double hessian_threshold = 500.0;
+  // so a threshold here means what it means in OpenCV/RTAB-Map. Range: [0, 1e12].
+  double hessian_threshold = Options().hessian_threshold;
   // SURF and KAZE: number of octaves (octaves whose filters exceed the image are skipped).
   // Range [1, 8].
-  int octaves = 4;
+  int octaves = Options().octaves;
   // SURF: scale intervals searched per octave; each octave evaluates intervals + 2 filter sizes
   // (the default 2 gives the paper's 4 filters per octave: 9, 15, 21, 27 in the first octave).
   // Same meaning as OpenCV's nOctaveLayers. Range [1, 8].
-  int intervals = 2;
+  int intervals = Options().intervals;
   // SURF: maxima whose Hessian has a principal curvature ratio above this are dropped as edges
   // (SIFT's edge test). Not in the SURF paper: box filters let oblique edges through, and this
   // raised repeatability under a 30-degree rotation from 0.50 to 0.60 on the test pairs.
   // 0 turns it off (the published detector). Range: 0 or [1, 100].
   double edge_ratio = 5.0;
   // SURF and KAZE: U-SURF (no orientation, angle -1). SIFT and ORB ignore it.
-  bool upright = false;
+  bool upright = Options().upright;
   // Keep at most this many features, strongest response first; 0 keeps all (ORB: 0 means 1000,
   // because OpenCV's ORB needs a cap). Range [0, 1000000].
-  int max_features = 0;
+  int max_features = Options().max_features;
   // Drop features whose detector response is below this (in each detector's own units).
-  // Range: >= 0, finite.
-  float min_response = 0.0f;
+  // Range: [0, 1e30].
+  float min_response = static_cast<float>(Options().min_response);
   // SURF: worker threads for the Hessian layers, orientations and descriptors; results do not
   // depend on it. 0 = all hardware threads. The OpenCV extractors follow cv::setNumThreads()
   // instead. Range [0, 64].

@@ -205,11 +205,11 @@ void BayesFilter::decide(FilterOutcome& outcome) {
     outcome.reason = RejectReason::kNoHypothesis;
   } else {
     outcome.score = 1.0 - outcome.new_place_posterior;
-    if (settings_.rule == DecisionRule::kPaper000) {
-      outcome.reason = outcome.new_place_posterior < settings_.loop_threshold
+    if (settings_.rule == DecisionRule::kPaper) {
+      outcome.reason = outcome.new_place_posterior < settings_.t_loop
                            ? RejectReason::kNone
                            : RejectReason::kBelowThreshold;
-    } else if (outcome.score < settings_.loop_threshold) {
+    } else if (outcome.score < settings_.t_loop) {
       outcome.reason = RejectReason::kBelowThreshold;
     } else if (settings_.loop_ratio > 0.0 &&
                outcome.score < settings_.loop_ratio * previous_score_) {

@@ -7,23 +7,6 @@
 
 namespace placedb {
 
-const char* toString(DecisionRule rule) {
-  switch (rule) {
-    case DecisionRule::kRtabmap:
-      return "rtabmap";
-    case DecisionRule::kPaper000:
-      return "paper000";
-  }
-  return "unknown";
-}
-
-DecisionRule parseDecisionRule(const std::string& name) {
-  if (name == "rtabmap") return DecisionRule::kRtabmap;
-  if (name == "paper000") return DecisionRule::kPaper000;
-  throw Error(ErrorCode::kInvalidArgument,
-              "unknown loop decision rule '" + name + "'; valid: rtabmap, paper000");
-}
-
 namespace {
 // NaN fails every comparison, so "inside" is written to be false for it.
 bool openUnit(double v) { return v > 0.0 && v < 1.0; }
@@ -37,17 +20,17 @@ void BayesFilterSettings::validate() const {
   if (!openUnit(location_to_new_place)) {
     problems << " location_to_new_place=" << location_to_new_place << " (valid: 0 < x < 1);";
   }
-  if (!(gaussian_sigma > 0.0) || !std::isfinite(gaussian_sigma)) {
-    problems << " gaussian_sigma=" << gaussian_sigma << " (valid: finite, > 0);";
+  if (!(prediction_sigma > 0.0) || !std::isfinite(prediction_sigma)) {
+    problems << " prediction_sigma=" << prediction_sigma << " (valid: finite, > 0);";
   }
-  if (neighbourhood_links < 0 || neighbourhood_links > 1000) {
-    problems << " neighbourhood_links=" << neighbourhood_links << " (valid: 0..1000);";
+  if (prediction_links < 0 || prediction_links > 1000) {
+    problems << " prediction_links=" << prediction_links << " (valid: 0..1000);";
   }
-  if (rule != DecisionRule::kRtabmap && rule != DecisionRule::kPaper000) {
-    problems << " rule=" << static_cast<int>(rule) << " (valid: rtabmap, paper000);";
+  if (rule != DecisionRule::kRtabmap && rule != DecisionRule::kPaper) {
+    problems << " rule=" << static_cast<int>(rule) << " (valid: rtabmap, paper);";
   }
-  if (!(loop_threshold > 0.0 && loop_threshold <= 1.0)) {
-    problems << " loop_threshold=" << loop_threshold << " (valid: 0 < x <= 1);";
+  if (!(t_loop >= 0.0 && t_loop <= 1.0)) {
+    problems << " t_loop=" << t_loop << " (valid: 0 <= x <= 1);";
   }
   if (!(loop_ratio >= 0.0 && loop_ratio <= 1.0)) {
     problems << " loop_ratio=" << loop_ratio << " (valid: 0 <= x <= 1, 0 disables);";

@@ -49,8 +49,8 @@ const std::vector<std::pair<std::uint32_t, int>>& WmNeighbourhoods::reach(std::s
 
 TransitionModel::TransitionModel(const BayesFilterSettings& settings) : settings_(settings) {
   settings_.validate();
-  const double two_sigma_sq = 2.0 * settings_.gaussian_sigma * settings_.gaussian_sigma;
-  for (int d = 0; d <= settings_.neighbourhood_links; ++d) {
+  const double two_sigma_sq = 2.0 * settings_.prediction_sigma * settings_.prediction_sigma;
+  for (int d = 0; d <= settings_.prediction_links; ++d) {
     weight_by_links_.push_back(std::exp(-static_cast<double>(d) * d / two_sigma_sq));
   }
 }
@@ -67,7 +67,7 @@ PredictionRow TransitionModel::fromLocation(LocationId j, const LinkGraph& graph
                                             const LinkGraph::NodeFilter& in_wm) const {
   PredictionRow row;
   row.to_new_place = settings_.location_to_new_place;
-  auto reach = graph.withinLinks(j, settings_.neighbourhood_links, in_wm);
+  auto reach = graph.withinLinks(j, settings_.prediction_links, in_wm);
   if (reach.empty()) reach.emplace_back(j, 0);
   std::vector<int> count_by_links(weight_by_links_.size(), 0);
   for (const auto& entry : reach) ++count_by_links[static_cast<std::size_t>(entry.second)];
@@ -82,7 +82,7 @@ PredictionRow TransitionModel::fromLocation(LocationId j, const LinkGraph& graph
 
 void TransitionModel::spreadFrom(std::size_t k, double mass, WmNeighbourhoods& neighbourhoods,
                                  std::vector<double>& predicted) const {
-  const auto& reach = neighbourhoods.reach(k, settings_.neighbourhood_links);
+  const auto& reach = neighbourhoods.reach(k, settings_.prediction_links);
   const double total = rowTotal(neighbourhoods.countByDepth());
   const double share = 1.0 - settings_.location_to_new_place;
   for (const auto& [position, links] : reach) {

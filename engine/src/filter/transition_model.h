@@ -1,6 +1,6 @@
 #pragma once
 // Rows of the filter's prediction matrix p(S_t | S_{t-1}), built on demand and kept sparse: a row
-// from a location only names the WM locations within neighbourhood_links links of it.
+// from a location only names the WM locations within prediction_links links of it.
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -38,7 +38,7 @@ class TransitionModel {
  public:
   explicit TransitionModel(const BayesFilterSettings& settings);
 
-  // Row of a location j in WM. The locations within neighbourhood_links links of j, walking only
+  // Row of a location j in WM. The locations within prediction_links links of j, walking only
   // through WM locations, share 1 - location_to_new_place in proportion to
   // exp(-d^2 / (2 sigma^2)), d = links from j (j itself has d = 0). A j missing from the graph
   // counts as isolated and keeps the whole share.
@@ -55,7 +55,7 @@ class TransitionModel {
   double newPlaceStays(std::size_t wm_size) const;
   double newPlaceToEachLocation(std::size_t wm_size) const;
 
-  // Unnormalised Gaussian weight at d links (d in 0..neighbourhood_links).
+  // Unnormalised Gaussian weight at d links (d in 0..prediction_links).
   double weightAt(int links) const { return weight_by_links_.at(static_cast<std::size_t>(links)); }
 
  private:

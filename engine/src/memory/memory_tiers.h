@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "placedb/map.h"  // Tier
+#include "placedb/options.h"
 
 namespace placedb {
 
@@ -36,17 +37,22 @@ using MemoryLocationId = std::int64_t;
 const char* toString(Tier tier);
 Tier parseTier(const std::string& name);  // "stm", "wm", "ltm"; kInvalidArgument otherwise
 
+// Defaults are Options' (stm_size, wm_max, t_time_ms, wm_immune_newest, wm_recent_ratio,
+// max_retrieved).
 struct MemorySettings {
-  int stm_size = 10;                 // RTAB-Map's Mem/STMSize
-  std::int64_t wm_max = 0;           // WM size bound; 0 = bounded by time only
-  double time_limit_s = 0.7;         // T_time (paper 000: 0.7 s at 1 Hz); 0 = no time trigger
-  int immune_newest_count = 0;       // newest WM locations never transferred
-  double immune_newest_ratio = 0.2;  // ... or this share of WM (RTAB-Map's Mem/RecentWmRatio)
-  int max_transfers_per_frame = 0;   // cap of the time trigger; 0 = none
-  std::int64_t time_floor = 0;       // the time trigger never takes WM below this size
-  int max_retrieved = 2;             // RTAB-Map's Rtabmap/MaxRetrieved
+  int stm_size = Options().stm_size;                     // RTAB-Map's Mem/STMSize
+  std::int64_t wm_max = Options().wm_max;                // WM size bound; 0 = bounded by time only
+  double time_limit_s = Options().t_time_ms / 1000.0;    // T_time; 0 = no time trigger
+  int immune_newest_count = Options().wm_immune_newest;  // newest WM locations never transferred
+  // ... or this share of WM (RTAB-Map's Mem/RecentWmRatio)
+  double immune_newest_ratio = Options().wm_recent_ratio;
+  int max_transfers_per_frame = 0;              // cap of the time trigger; 0 = none
+  std::int64_t time_floor = Options().wm_min;   // the time trigger never takes WM below this
+  int max_retrieved = Options().max_retrieved;  // RTAB-Map's Rtabmap/MaxRetrieved
 
-  void validate() const;  // kInvalidArgument naming each bad field and its valid range
+  // kInvalidArgument naming each bad field and its valid range; accepts at least what
+  // Options::validate() accepts (options_test).
+  void validate() const;
 };
 
 struct LocationRecord {

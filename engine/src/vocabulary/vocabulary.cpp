@@ -26,23 +26,18 @@ std::string formatFloat(float v) {
 
 }  // namespace
 
-const char* toString(WordRule rule) { return rule == WordRule::kGreedy ? "greedy" : "nndr"; }
-const char* toString(DistanceUnit unit) {
-  return unit == DistanceUnit::kSquared ? "squared" : "euclidean";
-}
-
 void VocabularyOptions::validate() const {
   require(rule == WordRule::kGreedy || rule == WordRule::kNndr, "rule must be greedy or nndr");
   require(unit == DistanceUnit::kSquared || unit == DistanceUnit::kEuclidean,
           "distance unit must be squared or euclidean");
-  require(t_nndr > 0 && t_nndr <= 1, "t_nndr must be in (0, 1], got " + formatFloat(t_nndr));
-  require(t_nd1 >= 0 && std::isfinite(t_nd1), "t_nd1 must be >= 0, got " + formatFloat(t_nd1));
-  require(t_nd2 >= t_nd1 && std::isfinite(t_nd2),
-          "t_nd2 must be finite and >= t_nd1, got " + formatFloat(t_nd2));
+  require(t_nndr >= 0 && t_nndr <= 1, "t_nndr must be in [0, 1], got " + formatFloat(t_nndr));
+  require(t_nd1 >= 0 && t_nd1 <= 1e30f, "t_nd1 must be in [0, 1e30], got " + formatFloat(t_nd1));
+  require(t_nd2 >= t_nd1 && t_nd2 <= 1e30f,
+          "t_nd2 must be in [t_nd1, 1e30], got " + formatFloat(t_nd2));
   require(kd_trees >= 1 && kd_trees <= 64,
           "kd_trees must be in [1, 64], got " + std::to_string(kd_trees));
-  require(checks >= 1 && checks <= 1000000,
-          "checks must be in [1, 1000000], got " + std::to_string(checks));
+  require(checks >= 1 && checks <= (1 << 20),
+          "checks must be in [1, 1048576], got " + std::to_string(checks));
   require(leaf_size >= 1 && leaf_size <= 4096,
           "leaf_size must be in [1, 4096], got " + std::to_string(leaf_size));
 }

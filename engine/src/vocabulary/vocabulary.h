@@ -28,30 +28,29 @@
 
 #include <opencv2/core.hpp>
 
+#include "placedb/options.h"
 #include "vocabulary/id_table.h"
 #include "vocabulary/kd_forest.h"
 #include "vocabulary/slot_store.h"
 
 namespace placedb::vocab {
 
-enum class WordRule : std::uint8_t { kGreedy = 0, kNndr = 1 };
-enum class DistanceUnit : std::uint8_t { kSquared = 0, kEuclidean = 1 };
+using placedb::DistanceUnit;
+using placedb::WordRule;
 
-const char* toString(WordRule rule);
-const char* toString(DistanceUnit unit);
-
+// Defaults are Options' (word_rule, distance_unit, t_nndr, t_nd1, t_nd2, kd_trees, kd_checks).
 struct VocabularyOptions {
-  WordRule rule = WordRule::kGreedy;
-  DistanceUnit unit = DistanceUnit::kSquared;
-  float t_nndr = 0.8f;   // (0, 1]
-  float t_nd1 = 0.001f;  // >= 0, in `unit`
-  float t_nd2 = 0.08f;   // >= t_nd1, in `unit`
-  int kd_trees = 4;      // [1, 64]
+  WordRule rule = Options().word_rule;
+  DistanceUnit unit = Options().distance_unit;
+  float t_nndr = static_cast<float>(Options().t_nndr);  // [0, 1]
+  float t_nd1 = static_cast<float>(Options().t_nd1);    // [0, 1e30], in `unit`
+  float t_nd2 = static_cast<float>(Options().t_nd2);    // [t_nd1, 1e30], in `unit`
+  int kd_trees = Options().kd_trees;                    // [1, 64]
   // Points compared per search (whole buckets, so it may overshoot by a bucket). With 4 trees and
   // 8-point buckets, 64 gave 0.964 nearest-neighbour recall on 1M clustered 64-d words and 0.982
   // on 100k (bench/vocabulary/README.md); 16-point buckets gave 0.89 at 1M.
-  int checks = 64;    // [1, 1000000]
-  int leaf_size = 8;  // points per kd-tree bucket before it splits, [1, 4096]
+  int checks = Options().kd_checks;  // [1, 1048576]
+  int leaf_size = 8;                 // points per kd-tree bucket before it splits, [1, 4096]
   std::uint64_t seed = 0x706c616365646231ull;  // the forest's split choices
   bool fixed = false;                          // no new words: every feature takes its nearest word
 

@@ -8,7 +8,9 @@
 
 namespace placedb::storage {
 
-enum class Tier : int { kSTM = 0, kWM = 1, kLTM = 2 };
+// Where a location is: short-term, working or long-term memory (the engine's MemoryTiers use
+// this same enum; the numbers are what the locations table stores).
+enum class Tier : std::uint8_t { kStm = 0, kWm = 1, kLtm = 2 };
 enum class FrameOutcome : int { kNewLocation = 0, kMerged = 1, kBad = 2 };
 enum class LinkType : int { kNeighbour = 0, kLoopClosure = 1, kMerge = 2 };
 enum class VocabularyMode : int { kFixed = 0, kSeed = 1 };
@@ -51,7 +53,7 @@ struct LocationRecord {
   std::int64_t id = 0;  // assigned by the engine
   std::int64_t session_id = 0;
   std::int64_t weight = 0;
-  Tier tier = Tier::kSTM;
+  Tier tier = Tier::kStm;
   std::optional<std::int64_t> created_frame;
 };
 

@@ -1,0 +1,188 @@
+// MapStore: what the engine keeps to resume exactly (engine state, kd-forest nodes, the
+// filter's posterior) and the vocabulary files imported into the map.
+#include <nlohmann/json.hpp>
+
+#include "database.h"
+#include "placedb/storage/map_store.h"
+#include "write_scope.h"
+
+namespace placedb::storage {
+
+// ---- Engine state ----
+
+void MapStore::putState(const std::string& key, const std::vector<std::uint8_t>& value) {
+  WriteScope scope(*this);
+  auto s = db_->cached(
+      "INSERT INTO engine_state (key, value) VALUES (?1, ?2) "
+      "ON CONFLICT (key) DO UPDATE SET value = excluded.value");
+  s->bind(1, key);
+  s->bindBlob(2, value.data(), value.size());
+  s->run();
+  scope.commit();
+}
+
+void MapStore::putState(const std::string& key, const std::string& value) {
+  WriteScope scope(*this);
+  auto s = db_->cached(
+      "INSERT INTO engine_state (key, value) VALUES (?1, ?2) "
+      "ON CONFLICT (key) DO UPDATE SET value = excluded.value");
+  s->bind(1, key);
+  s->bind(2, value);
+  s->run();
+  scope.commit();
+}
+
+std::optional<std::vector<std::uint8_t>> MapStore::getState(const std::string& key) const {
+  auto s = db_->cached("SELECT value FROM engine_state WHERE key = ?1");
+  s->bind(1, key);
+  if (!s->step()) return std::nullopt;
+  return s->columnBlob(0);
+}
+
+std::optional<std::string> MapStore::getStateText(const std::string& key) const {
+  auto s = db_->cached("SELECT value FROM engine_state WHERE key = ?1");
+  s->bind(1, key);
+  if (!s->step()) return std::nullopt;
+  return s->columnText(0);
+}
+
+void MapStore::deleteState(const std::string& key) {
+  WriteScope scope(*this);
+  auto s = db_->cached("DELETE FROM engine_state WHERE key = ?1");
+  s->bind(1, key);
+  s->run();
+  scope.commit();
+}
+
+void MapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
+                            const std::vector<std::pair<int, std::int64_t>>& deletions,
+                            bool replace_all) {
+  WriteScope scope(*this);
+  if (replace_all) {
+    auto s = db_->cached("DELETE FROM kd_nodes");
+    s->run();
+  }
+  if (!deletions.empty()) {
+    auto s = db_->cached("DELETE FROM kd_nodes WHERE tree = ?1 AND node = ?2");
+    for (const auto& [tree, node] : deletions) {
+      s->bind(1, std::int64_t(tree));
+      s->bind(2, node);
+      s->run();
+    }
+  }
+  if (!upserts.empty()) {
+    auto s = db_->cached(
+        "INSERT INTO kd_nodes (tree, node, left_child, right_child, split_dim, split_value) "
+        "VALUES (?1, ?2, ?3, ?4, ?5, ?6) ON CONFLICT (tree, node) DO UPDATE SET "
+        "left_child = excluded.left_child, right_child = excluded.right_child, "
+        "split_dim = excluded.split_dim, split_value = excluded.split_value");
+    for (const KdNodeRecord& n : upserts) {
+      s->bind(1, std::int64_t(n.tree));
+      s->bind(2, n.node);
+      s->bind(3, n.left_child);
+      s->bind(4, n.right_child);
+      s->bind(5, std::int64_t(n.split_dim));
+      s->bind(6, n.split_value);
+      s->run();
+    }
+  }
+  scope.commit();
+}
+
+std::vector<KdNodeRecord> MapStore::loadKdNodes() const {
+  std::vector<KdNodeRecord> out;
+  auto s = db_->cached(
+      "SELECT tree, node, left_child, right_child, split_dim, split_value FROM kd_nodes "
+      "ORDER BY tree, node");
+  while (s->step()) {
+    KdNodeRecord n;
+    n.tree = static_cast<int>(s->columnInt(0));
+    n.node = s->columnInt(1);
+    n.left_child = s->columnInt(2);
+    n.right_child = s->columnInt(3);
+    n.split_dim = static_cast<int>(s->columnInt(4));
+    n.split_value = s->columnDouble(5);
+    out.push_back(n);
+  }
+  return out;
+}
+
+void MapStore::putPosterior(const std::vector<std::pair<std::int64_t, double>>& posterior) {
+  WriteScope scope(*this);
+  {
+    auto s = db_->cached("DELETE FROM filter_posterior");
+    s->run();
+  }
+  auto s = db_->cached("INSERT INTO filter_posterior (location_id, probability) VALUES (?1, ?2)");
+  for (const auto& [location_id, probability] : posterior) {
+    s->bind(1, location_id);
+    s->bind(2, probability);
+    s->run();
+  }
+  scope.commit();
+}
+
+std::vector<std::pair<std::int64_t, double>> MapStore::loadPosterior() const {
+  auto s =
+      db_->cached("SELECT location_id, probability FROM filter_posterior ORDER BY location_id");
+  std::vector<std::pair<std::int64_t, double>> result;
+  while (s->step()) result.emplace_back(s->columnInt(0), s->columnDouble(1));
+  return result;
+}
+
+// ---- Vocabulary imports ----
+
+std::int64_t MapStore::recordVocabularyImport(const VocabularyImportRecord& v) {
+  WriteScope scope(*this);
+  auto s = db_->cached(
+      "INSERT INTO vocabulary_imports (session_id, file, checksum, word_count, mode, imported_at, "
+      "extractor, distance_unit, settings) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, coalesce(?6, strftime('%Y-%m-%dT%H:%M:%fZ', 'now')), ?7, ?8, "
+      "?9)");
+  s->bind(1, v.session_id);
+  s->bind(2, v.file);
+  s->bind(3, v.checksum);
+  s->bind(4, v.word_count);
+  s->bind(5, std::string(v.mode == VocabularyMode::kFixed ? "fixed" : "seed"));
+  if (!v.imported_at.empty()) s->bind(6, v.imported_at);
+  s->bind(7, v.extractor);
+  s->bind(8, v.distance_unit);
+  s->bind(9, nlohmann::json(v.settings).dump());
+  s->run();
+  const std::int64_t id = sqlite3_last_insert_rowid(db_->handle());
+  scope.commit();
+  return id;
+}
+
+std::vector<VocabularyImportRecord> MapStore::vocabularyImports() const {
+  auto s = db_->cached(
+      "SELECT id, session_id, file, checksum, word_count, mode, imported_at, "
+      "coalesce(extractor, ''), coalesce(distance_unit, ''), settings "
+      "FROM vocabulary_imports ORDER BY id");
+  std::vector<VocabularyImportRecord> result;
+  while (s->step()) {
+    VocabularyImportRecord v;
+    v.id = s->columnInt(0);
+    v.session_id = s->columnOptionalInt(1);
+    v.file = s->columnText(2);
+    v.checksum = s->columnText(3);
+    v.word_count = s->columnInt(4);
+    v.mode = s->columnText(5) == "fixed" ? VocabularyMode::kFixed : VocabularyMode::kSeed;
+    v.imported_at = s->columnText(6);
+    v.extractor = s->columnText(7);
+    v.distance_unit = s->columnText(8);
+    if (!s->isNull(9)) {
+      const auto settings = nlohmann::json::parse(s->columnText(9), nullptr, false);
+      if (!settings.is_object())
+        throw StorageError(ErrorCode::kMapRefused, "map " + path_ + ": vocabulary import " +
+                                                       std::to_string(v.id) +
+                                                       " has damaged settings (not a JSON object)");
+      for (const auto& [key, value] : settings.items())
+        if (value.is_string()) v.settings[key] = value.get<std::string>();
+    }
+    result.push_back(std::move(v));
+  }
+  return result;
+}
+
+}  // namespace placedb::storage

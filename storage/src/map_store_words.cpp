@@ -1,0 +1,229 @@
+// MapStore: the words of the vocabulary and the word references that make each location's
+// signature.
+#include <algorithm>
+#include <cstring>
+#include <set>
+
+#include "database.h"
+#include "placedb/storage/map_store.h"
+#include "write_scope.h"
+
+namespace placedb::storage {
+namespace {
+
+std::size_t bytesPerValue(DescriptorKind type) { return type == DescriptorKind::kFloat32 ? 4 : 1; }
+
+}  // namespace
+
+// ---- Words ----
+
+void MapStore::insertWords(const std::vector<WordRecord>& words) {
+  WriteScope scope(*this);
+  auto s = db_->cached(
+      "INSERT INTO words (id, created_frame, vocabulary_import_id, descriptor_type, dim, "
+      "descriptor, source_frame) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
+  for (const WordRecord& w : words) {
+    if (w.dim <= 0 ||
+        w.descriptor.size() != static_cast<std::size_t>(w.dim) * bytesPerValue(w.type)) {
+      throw StorageError(ErrorCode::kInvalidArgument,
+                         "word " + std::to_string(w.id) + ": descriptor of " +
+                             std::to_string(w.descriptor.size()) + " bytes does not match dim " +
+                             std::to_string(w.dim));
+    }
+    s->bind(1, w.id);
+    s->bind(2, w.created_frame);
+    s->bind(3, w.vocabulary_import_id);
+    s->bind(4, std::int64_t{static_cast<int>(w.type)});
+    s->bind(5, std::int64_t{w.dim});
+    s->bindBlob(6, w.descriptor.data(), w.descriptor.size());
+    s->bind(7, w.source_frame);
+    s->run();
+  }
+  scope.commit();
+}
+
+std::vector<WordRecord> MapStore::loadWords(const std::vector<std::int64_t>& word_ids) const {
+  auto s = db_->cached(
+      "SELECT id, created_frame, vocabulary_import_id, descriptor_type, dim, descriptor, "
+      "source_frame FROM words WHERE id = ?1");
+  std::vector<WordRecord> result;
+  result.reserve(word_ids.size());
+  for (std::int64_t id : word_ids) {
+    s->reset();
+    s->bind(1, id);
+    if (!s->step()) continue;
+    WordRecord w;
+    w.id = s->columnInt(0);
+    w.created_frame = s->columnOptionalInt(1);
+    w.vocabulary_import_id = s->columnOptionalInt(2);
+    w.type = static_cast<DescriptorKind>(s->columnInt(3));
+    w.dim = static_cast<int>(s->columnInt(4));
+    w.descriptor = s->columnBlob(5);
+    w.source_frame = s->columnOptionalInt(6);
+    result.push_back(std::move(w));
+  }
+  return result;
+}
+
+void MapStore::loadFloatDescriptors(const std::vector<std::int64_t>& word_ids, int dim, float* rows,
+                                    std::int64_t* created) const {
+  if (!std::is_sorted(word_ids.begin(), word_ids.end()))
+    throw StorageError(ErrorCode::kInvalidArgument, "loadFloatDescriptors: ids must be sorted");
+  // Word ids rise with creation, and the words of working memory are mostly runs of recent ones:
+  // walking the table in id order and seeking again only across a gap costs far less than one
+  // B-tree descent per word.
+  constexpr int kMaxSkipped = 16;
+  auto s = db_->cached(
+      "SELECT id, created_frame, descriptor_type, dim, descriptor FROM words WHERE id >= ?1 "
+      "ORDER BY id");
+  const std::size_t row_bytes = static_cast<std::size_t>(dim) * sizeof(float);
+  auto missing = [&](std::int64_t id) {
+    return StorageError(ErrorCode::kMapRefused,
+                        "map " + path_ + ": word " + std::to_string(id) + " is missing");
+  };
+  std::size_t i = 0;
+  while (i < word_ids.size()) {
+    s->reset();
+    s->bind(1, word_ids[i]);
+    int skipped = 0;
+    while (i < word_ids.size() && skipped <= kMaxSkipped) {
+      if (!s->step()) throw missing(word_ids[i]);
+      const std::int64_t id = s->columnInt(0);
+      if (id < word_ids[i]) {
+        ++skipped;
+        continue;
+      }
+      if (id > word_ids[i]) throw missing(word_ids[i]);
+      const auto [data, size] = s->columnBlobView(4);
+      if (static_cast<DescriptorKind>(s->columnInt(2)) != DescriptorKind::kFloat32 ||
+          s->columnInt(3) != dim || size != row_bytes)
+        throw StorageError(ErrorCode::kMapRefused, "map " + path_ + ": word " + std::to_string(id) +
+                                                       " is not a float descriptor of dimension " +
+                                                       std::to_string(dim));
+      std::memcpy(rows + i * static_cast<std::size_t>(dim), data, row_bytes);
+      created[i] = s->isNull(1) ? -1 : s->columnInt(1);
+      ++i;
+      skipped = 0;
+    }
+  }
+}
+
+std::int64_t MapStore::wordCount() const {
+  auto s = db_->cached("SELECT count(*) FROM words");
+  s->step();
+  return s->columnInt(0);
+}
+
+std::optional<std::int64_t> MapStore::maxWordId() const {
+  auto s = db_->cached("SELECT max(id) FROM words");
+  s->step();
+  return s->columnOptionalInt(0);
+}
+
+// ---- Word references ----
+
+void MapStore::insertWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs) {
+  WriteScope scope(*this);
+  std::int64_t ordinal = 0;
+  {
+    auto s = db_->cached("SELECT max(ordinal) FROM word_refs WHERE location_id = ?1");
+    s->bind(1, location_id);
+    s->step();
+    if (!s->isNull(0)) ordinal = s->columnInt(0) + 1;
+  }
+  auto s = db_->cached(
+      "INSERT INTO word_refs (location_id, ordinal, word_id, x, y, size, angle, response) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)");
+  for (const WordRef& r : refs) {
+    s->bind(1, location_id);
+    s->bind(2, ordinal++);
+    s->bind(3, r.word_id);
+    s->bind(4, double{r.x});
+    s->bind(5, double{r.y});
+    s->bind(6, double{r.size});
+    s->bind(7, double{r.angle});
+    s->bind(8, double{r.response});
+    s->run();
+  }
+  scope.commit();
+}
+
+void MapStore::replaceWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs) {
+  WriteScope scope(*this);
+  {
+    auto s = db_->cached("DELETE FROM word_refs WHERE location_id = ?1");
+    s->bind(1, location_id);
+    s->run();
+  }
+  insertWordRefs(location_id, refs);
+  scope.commit();
+}
+
+std::vector<WordRef> MapStore::loadWordRefs(std::int64_t location_id) const {
+  auto s = db_->cached(
+      "SELECT word_id, x, y, size, angle, response FROM word_refs WHERE location_id = ?1 "
+      "ORDER BY ordinal");
+  s->bind(1, location_id);
+  std::vector<WordRef> result;
+  while (s->step()) {
+    result.push_back(
+        WordRef{s->columnInt(0), static_cast<float>(s->columnDouble(1)),
+                static_cast<float>(s->columnDouble(2)), static_cast<float>(s->columnDouble(3)),
+                static_cast<float>(s->columnDouble(4)), static_cast<float>(s->columnDouble(5))});
+  }
+  return result;
+}
+
+std::map<std::int64_t, std::vector<WordRef>> MapStore::loadWordRefs(
+    const std::vector<std::int64_t>& location_ids) const {
+  std::map<std::int64_t, std::vector<WordRef>> result;
+  for (std::int64_t id : location_ids) result[id] = loadWordRefs(id);
+  return result;
+}
+
+std::map<std::int64_t, std::vector<std::int64_t>> MapStore::loadWordIds(
+    const std::vector<std::int64_t>& location_ids) const {
+  auto s = db_->cached("SELECT word_id FROM word_refs WHERE location_id = ?1 ORDER BY ordinal");
+  std::map<std::int64_t, std::vector<std::int64_t>> result;
+  for (std::int64_t id : location_ids) {
+    s->reset();
+    s->bind(1, id);
+    auto& ids = result[id];
+    while (s->step()) ids.push_back(s->columnInt(0));
+  }
+  return result;
+}
+
+std::vector<std::int64_t> MapStore::importedWordIds() const {
+  // Read on every open: the partial index words_imported serves it without a scan of the whole
+  // vocabulary (millions of words on a long map).
+  auto s = db_->cached(
+      "SELECT id FROM words INDEXED BY words_imported WHERE vocabulary_import_id IS NOT NULL "
+      "ORDER BY id");
+  std::vector<std::int64_t> ids;
+  while (s->step()) ids.push_back(s->columnInt(0));
+  return ids;
+}
+
+std::vector<std::int64_t> MapStore::wordsOfLocations(
+    const std::vector<std::int64_t>& location_ids) const {
+  auto s = db_->cached("SELECT word_id FROM word_refs WHERE location_id = ?1");
+  std::set<std::int64_t> words;
+  for (std::int64_t id : location_ids) {
+    s->reset();
+    s->bind(1, id);
+    while (s->step()) words.insert(s->columnInt(0));
+  }
+  return {words.begin(), words.end()};
+}
+
+std::vector<std::int64_t> MapStore::locationsOfWord(std::int64_t word_id) const {
+  auto s = db_->cached(
+      "SELECT DISTINCT location_id FROM word_refs WHERE word_id = ?1 ORDER BY location_id");
+  s->bind(1, word_id);
+  std::vector<std::int64_t> result;
+  while (s->step()) result.push_back(s->columnInt(0));
+  return result;
+}
+
+}  // namespace placedb::storage
