@@ -122,6 +122,7 @@ TEST(GeometricCheck, EitherRulePassesFewPairsWithStrongEvidence) {
   v.query.descriptors = v.query.descriptors.rowRange(0, 10).clone();
   v.candidate.descriptors = v.candidate.descriptors.rowRange(0, 10).clone();
   GeometricCheckSettings settings;
+  settings.rule = GeometryRule::kInliers;
   settings.max_nfa = 1e-3;
   settings.min_overlap = 0;
   EXPECT_FALSE(checkGeometry(v.query, v.candidate, settings).passed) << "inliers rule";
@@ -172,6 +173,17 @@ TEST(GeometricCheck, IsDeterministic) {
   EXPECT_EQ(a.log10_nfa, b.log10_nfa);
   EXPECT_TRUE(a.passed);
   EXPECT_GE(a.inliers, GeometricCheckSettings().min_inliers);  // the search stops there
+}
+
+TEST(GeometricCheck, TheSameViewAgainPasses) {
+  // Pairs that did not move fit every skew-symmetric fundamental matrix: no single model wins,
+  // yet the same image again is the surest revisit there is.
+  std::mt19937 rng(31);
+  TwoViews v = rigidScene(rng);
+  v.candidate = v.query;
+  const GeometricResult r = checkGeometry(v.query, v.candidate, GeometricCheckSettings());
+  EXPECT_TRUE(r.passed);
+  EXPECT_GE(r.inliers, static_cast<int>(v.query.points.size()) / 2);
 }
 
 }  // namespace

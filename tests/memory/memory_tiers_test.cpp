@@ -112,6 +112,7 @@ TEST(MemoryTiers, TransfersLowestWeightThenOldestAndRespectsImmunity) {
 
 TEST(MemoryTiers, PlannedTransfersFollowSizeAndTimeTriggers) {
   MemorySettings s;
+  s.time_floor = 0;
   s.stm_size = 0;
   s.wm_max = 10;
   s.time_limit_s = 0.7;

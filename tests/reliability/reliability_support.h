@@ -5,6 +5,7 @@
 #include <sqlite3.h>
 
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -14,8 +15,8 @@
 #include <vector>
 
 #include "child_process.h"
-#include "placedb/storage/map_files.h"
 #include "file_bytes.h"
+#include "placedb/storage/map_files.h"
 #include "placedb/storage/map_store.h"
 #include "test_paths.h"
 
@@ -64,9 +65,27 @@ struct StoredFrame {
 };
 
 // By source index, over every session of the map.
+// Schema objects in the file: 0 when a writer was killed after creating it, before its schema.
+inline int schemaObjects(const std::filesystem::path& map) {
+  sqlite3* db = nullptr;
+  int count = -1;
+  if (sqlite3_open_v2(map.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK)
+    sqlite3_exec(
+        db, "SELECT count(*) FROM sqlite_master",
+        [](void* out, int, char** values, char**) {
+          *static_cast<int*>(out) = values[0] ? std::atoi(values[0]) : -1;
+          return 0;
+        },
+        &count, nullptr);
+  sqlite3_close(db);
+  return count;
+}
+
 inline std::map<std::int64_t, StoredFrame> storedFrames(const std::filesystem::path& map) {
-  storage::MapStore store(map.string(), storage::OpenMode::kReadOnly);
   std::map<std::int64_t, StoredFrame> out;
+  // A blank SQLite file holds no frame (a read-only open refuses it as not yet a map).
+  if (schemaObjects(map) == 0) return out;
+  storage::MapStore store(map.string(), storage::OpenMode::kReadOnly);
   for (const auto& session : store.sessions())
     for (const auto& f : store.frames(session.id)) {
       StoredFrame s;

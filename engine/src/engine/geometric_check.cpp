@@ -186,6 +186,26 @@ GeometricResult fit(const Pairs& pairs, cv::Size2f extent, int keypoints,
   const bool by_chance =
       chance && f.passed && f.inliers >= minimumInliers(s.min_overlap, keypoints);
   r.passed = by_count || by_chance;
+  if (!r.passed) {
+    // Pairs that did not move (the same view again, as from a camera standing still) are a
+    // degenerate case for a fundamental matrix: every skew-symmetric F fits them, so the 7-point
+    // fit finds no single best model. They agree with the identity instead, which is judged by
+    // the same rule, its chance level bounded by the epipolar one (a point near a given point is
+    // rarer than a point near a given line).
+    int still = 0;
+    for (std::size_t i = 0; i < pairs.a.size(); ++i)
+      if (cv::norm(pairs.a[i] - pairs.b[i]) <= s.max_error_px) ++still;
+    const double log10_nfa =
+        epipolarLog10Nfa(r.matches, still, s.max_error_px, extent, /*iterations=*/1);
+    const bool still_by_count = count && still >= std::max(s.min_inliers, 8);
+    const bool still_by_chance = chance && log10_nfa <= std::log10(s.max_nfa) &&
+                                 still >= std::max(8, minimumInliers(s.min_overlap, keypoints));
+    if (still_by_count || still_by_chance) {
+      r.inliers = still;
+      r.log10_nfa = std::min(r.log10_nfa, log10_nfa);
+      r.passed = true;
+    }
+  }
   return r;
 }
 
