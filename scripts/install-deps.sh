@@ -13,6 +13,7 @@ packages=(
   nlohmann-json3-dev libcli11-dev libfmt-dev
   libplplot-dev plplot-driver-cairo
   python3 python3-dev pybind11-dev python3-numpy python3-pytest
+  clang-format
 )
 if [[ "${1:-}" == "--fuzz" ]]; then
   packages+=(clang-14 libclang-rt-14-dev)

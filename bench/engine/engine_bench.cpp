@@ -54,8 +54,8 @@ void run(const std::string& map_path, const std::vector<std::string>& frames,
   else
     map->resumeSession(map->lastSession()->id);
   for (std::size_t i = from; i < to; ++i) {
-    FrameResult r = map->process(placedb::loadGreyImage(frames[i]), static_cast<std::int64_t>(i),
-                                 frames[i]);
+    FrameResult r =
+        map->process(placedb::loadGreyImage(frames[i]), static_cast<std::int64_t>(i), frames[i]);
     rows.push_back(toRow(r));
     if ((i + 1) % 100 == 0)
       fmt::print(stderr, "  frame {}/{}: wm {} stm {} vocabulary {}\n", i + 1, frames.size(),
@@ -75,7 +75,8 @@ void writeLog(const fs::path& path, const std::vector<Row>& rows) {
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<std::size_t>(std::lround(p / 100.0 * (v.size() - 1))))];
+  return v[std::min(v.size() - 1,
+                    static_cast<std::size_t>(std::lround(p / 100.0 * (v.size() - 1))))];
 }
 
 void printStages(const char* title, const std::vector<Row>& rows) {
@@ -101,8 +102,10 @@ void printStages(const char* title, const std::vector<Row>& rows) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    fmt::print(stderr, "usage: {} LIST [--resume-at N] [--set key=value]... [--log-dir DIR] "
-               "[--limit N]\n", argv[0]);
+    fmt::print(stderr,
+               "usage: {} LIST [--resume-at N] [--set key=value]... [--log-dir DIR] "
+               "[--limit N]\n",
+               argv[0]);
     return 2;
   }
   fs::path list = argv[1];
@@ -111,10 +114,14 @@ int main(int argc, char** argv) {
   std::map<std::string, std::string> settings;
   for (int i = 2; i + 1 < argc; i += 2) {
     std::string flag = argv[i], value = argv[i + 1];
-    if (flag == "--resume-at") resume_at = std::stoul(value);
-    else if (flag == "--limit") limit = std::stoul(value);
-    else if (flag == "--log-dir") log_dir = value;
-    else if (flag == "--set") settings[value.substr(0, value.find('='))] = value.substr(value.find('=') + 1);
+    if (flag == "--resume-at")
+      resume_at = std::stoul(value);
+    else if (flag == "--limit")
+      limit = std::stoul(value);
+    else if (flag == "--log-dir")
+      log_dir = value;
+    else if (flag == "--set")
+      settings[value.substr(0, value.find('='))] = value.substr(value.find('=') + 1);
     else {
       fmt::print(stderr, "unknown flag {}\n", flag);
       return 2;
@@ -126,7 +133,8 @@ int main(int argc, char** argv) {
     if (limit && limit < frames.size()) frames.resize(limit);
     resume_at = std::min(resume_at, frames.size());
     fs::create_directories(log_dir);
-    const fs::path straight_map = log_dir / "straight.placedb", split_map = log_dir / "split.placedb";
+    const fs::path straight_map = log_dir / "straight.placedb",
+                   split_map = log_dir / "split.placedb";
     for (const auto& p : {straight_map, split_map}) placedb::storage::removeMap(p.string());
     std::vector<Row> straight, split;
     fmt::print(stderr, "straight run over {} frames\n", frames.size());

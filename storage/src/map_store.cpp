@@ -6,8 +6,8 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <filesystem>
 #include <cstring>
+#include <filesystem>
 
 #include "database.h"
 #include "map_file_check.h"
@@ -183,8 +183,9 @@ MapStore::MapStore(const std::string& given_path, OpenMode mode, const OpenOptio
     const auto verdict = detail::judgeIdentity(detail::readIdentity(*reader, path), path, current);
     std::error_code size_error;
     const auto bytes = std::filesystem::file_size(path, size_error);
-    const bool small_enough = options.integrity_check_max_bytes <= 0 ||
-                              (!size_error && std::int64_t(bytes) <= options.integrity_check_max_bytes);
+    const bool small_enough =
+        options.integrity_check_max_bytes <= 0 ||
+        (!size_error && std::int64_t(bytes) <= options.integrity_check_max_bytes);
     if (verdict != detail::Verdict::kBlankSqlite && small_enough)
       detail::checkIntegrity(*reader, path);
     if (verdict == detail::Verdict::kUpToDate) detail::checkSchemaObjects(*reader, path);

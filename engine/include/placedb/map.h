@@ -40,16 +40,16 @@ struct FrameRef {  // one input frame that a location covers
 };
 
 struct Hypothesis {
-  std::int64_t location_id = 0;   // 0: no hypothesis (empty working memory)
-  std::vector<FrameRef> frames;   // the frames that location covers
-  double posterior = 0;           // the posterior of that location
-  double score = 0;               // loop-closure probability, 1 - p(new place)
+  std::int64_t location_id = 0;  // 0: no hypothesis (empty working memory)
+  std::vector<FrameRef> frames;  // the frames that location covers
+  double posterior = 0;          // the posterior of that location
+  double score = 0;              // loop-closure probability, 1 - p(new place)
   bool accepted = false;
-  std::string rejected_reason;    // why it was not accepted; empty when accepted
-  int inliers = 0;                // the geometric check's epipolar inliers (0: no check ran)
-  int matches = 0;                // ... among this many correspondences
-  double log10_nfa = 0;           // the check's false alarms, log10 (0: no check; 99: no model)
-  int candidates_checked = 0;     // locations the geometric check ran on this frame
+  std::string rejected_reason;  // why it was not accepted; empty when accepted
+  int inliers = 0;              // the geometric check's epipolar inliers (0: no check ran)
+  int matches = 0;              // ... among this many correspondences
+  double log10_nfa = 0;         // the check's false alarms, log10 (0: no check; 99: no model)
+  int candidates_checked = 0;   // locations the geometric check ran on this frame
 };
 
 struct FrameResult {
@@ -57,7 +57,7 @@ struct FrameResult {
   std::int64_t session_id = 0;
   std::int64_t source_index = 0;
   FrameOutcome outcome = FrameOutcome::kNewLocation;
-  std::int64_t location_id = 0;   // the location holding this frame; 0 when bad
+  std::int64_t location_id = 0;  // the location holding this frame; 0 when bad
   Hypothesis hypothesis;
   StageTimes times;
   std::size_t feature_count = 0;
@@ -65,14 +65,14 @@ struct FrameResult {
   std::size_t vocabulary_size = 0;  // words in the kd-index (STM + WM)
   std::size_t stm_size = 0, wm_size = 0;
   std::size_t transferred = 0, retrieved = 0;  // tier moves this frame
-  std::size_t retrieved_by_search = 0;          // of the retrieved, found by the LTM search
+  std::size_t retrieved_by_search = 0;         // of the retrieved, found by the LTM search
   double mean_quantisation_error = 0;
 };
 
 struct SessionInfo {
   std::int64_t id = 0;
   std::string source;
-  std::string started_at, ended_at;   // ISO 8601 UTC; ended_at empty while open or after a crash
+  std::string started_at, ended_at;  // ISO 8601 UTC; ended_at empty while open or after a crash
   bool clean_close = false;
   std::string source_digest;  // as given to beginSession; empty when none was
   std::int64_t frames = 0;
@@ -85,7 +85,7 @@ using Tier = storage::Tier;
 struct QueryMatch {  // localisation: a stored location that resembles the query image
   std::int64_t location_id = 0;
   Tier tier = Tier::kWm;
-  double similarity = 0;       // eq. 5 against the location's signature; 0 for LTM (no words in RAM)
+  double similarity = 0;  // eq. 5 against the location's signature; 0 for LTM (no words in RAM)
   double code_similarity = 0;  // cosine of the place codes, any tier
   int inliers = 0;             // the geometric check's epipolar inliers (0 when it did not run)
   bool verified = false;       // the geometric check passed (geometry_rule)
@@ -150,8 +150,7 @@ class Map {
   // checked whole (kVocabularyRefused, naming the reason: magic, version, checksum, truncation,
   // dimension, extractor) before anything is written; the import is one transaction. Imported
   // words stay in the index whatever the memory tiers do. Returns the number of words.
-  virtual std::size_t importVocabulary(const std::string& file, bool text,
-                                       VocabularyMode mode) = 0;
+  virtual std::size_t importVocabulary(const std::string& file, bool text, VocabularyMode mode) = 0;
 
   // Ends the session cleanly. Safe to call twice.
   virtual void close() = 0;

@@ -61,18 +61,18 @@ struct Options {
   int kd_checks = 64;
 
   // --- memory (SPEC §5, §7) ---
-  int stm_size = 20;                   // newest locations that are never loop candidates
-  double t_sim = 0.2;                  // merge into the previous location above this similarity
-  int wm_max = 0;                      // WM size limit, 0 = unbounded
-  double t_time_ms = 0;                // limit on the frame's memory-bound stages (LTM search,
-                                       // likelihood, filter update, retrieval) that triggers
-                                       // transfer, 0 = off; features and verification excluded
-  int wm_min = 100;                    // the time limit never shrinks WM below this
-  int max_retrieved = 2;               // LTM neighbours of the hypothesis brought back per frame
-  int ltm_search = 5;                  // places most like the frame by place code (WM and LTM);
-                                       // those in LTM come back to WM first, 0 = off
-  int wm_immune_newest = 0;            // newest WM locations never transferred (at least)
-  double wm_recent_ratio = 0.2;        // ... or this share of WM, whichever is more
+  int stm_size = 20;             // newest locations that are never loop candidates
+  double t_sim = 0.2;            // merge into the previous location above this similarity
+  int wm_max = 0;                // WM size limit, 0 = unbounded
+  double t_time_ms = 0;          // limit on the frame's memory-bound stages (LTM search,
+                                 // likelihood, filter update, retrieval) that triggers
+                                 // transfer, 0 = off; features and verification excluded
+  int wm_min = 100;              // the time limit never shrinks WM below this
+  int max_retrieved = 2;         // LTM neighbours of the hypothesis brought back per frame
+  int ltm_search = 5;            // places most like the frame by place code (WM and LTM);
+                                 // those in LTM come back to WM first, 0 = off
+  int wm_immune_newest = 0;      // newest WM locations never transferred (at least)
+  double wm_recent_ratio = 0.2;  // ... or this share of WM, whichever is more
 
   // --- Bayes filter and decision (SPEC §6) ---
   double t_loop = 0.03;  // paper 0.11; the geometric check guards acceptance
@@ -83,11 +83,11 @@ struct Options {
   int prediction_links = 16;
 
   // --- hypothesis verification (RTAB-Map's later releases; not in the two papers) ---
-  int hypothesis_radius = 3;           // WM locations this many links from the filter's best
-                                       // hypothesis compete with it; the check picks among them
-  int hypothesis_top_similar = 5;      // ... and so do this many most similar WM locations
+  int hypothesis_radius = 3;       // WM locations this many links from the filter's best
+                                   // hypothesis compete with it; the check picks among them
+  int hypothesis_top_similar = 5;  // ... and so do this many most similar WM locations
   GeometryRule geometry_rule = GeometryRule::kEither;  // how the epipolar check
-                                       // decides (geometric_check.h)
+                                                       // decides (geometric_check.h)
   int geometry_min_inliers = 13;       // inliers rule: pairs one fundamental matrix must put
                                        // within geometry_max_error_px; 0 = no check
   double geometry_max_nfa = 0.001;     // nfa rule: a contrario number of false alarms at most;
@@ -101,11 +101,11 @@ struct Options {
   // or temporal_max_nfa and temporal_min_overlap) when it lies within temporal_radius WM links
   // of the location accepted as loop closure at most temporal_max_gap frames before; those
   // locations are checked as candidates too.
-  int temporal_min_inliers = 7;        // inliers rule (and either); 0 = off
-  double temporal_max_nfa = 100;       // nfa rule (and either); 0 = off
-  double temporal_min_overlap = 0.025; // nfa rule (and either)
-  int temporal_radius = 2;             // links from the last accepted closure
-  int temporal_max_gap = 1;            // frames since the last accepted closure (1 = previous)
+  int temporal_min_inliers = 7;         // inliers rule (and either); 0 = off
+  double temporal_max_nfa = 100;        // nfa rule (and either); 0 = off
+  double temporal_min_overlap = 0.025;  // nfa rule (and either)
+  int temporal_radius = 2;              // links from the last accepted closure
+  int temporal_max_gap = 1;             // frames since the last accepted closure (1 = previous)
 
   // Throws placedb::Error(kInvalidArgument) naming the key and the valid values or range;
   // an unknown key is refused with the list of known ones.

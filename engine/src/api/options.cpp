@@ -204,8 +204,7 @@ const std::vector<Row>& table() {
               "it in the geometric check (0 = the best hypothesis alone)"),
       integer("hypothesis_top_similar", &Options::hypothesis_top_similar, 0, 1000, "0..1000",
               "this many most similar WM locations also compete with the filter's best hypothesis"),
-      choice("geometry_rule", &Options::geometry_rule, parseGeometryRule,
-             "inliers|nfa|either",
+      choice("geometry_rule", &Options::geometry_rule, parseGeometryRule, "inliers|nfa|either",
              "how the geometric check decides: inliers (geometry_min_inliers pairs within "
              "geometry_max_error_px of one fundamental matrix), nfa (a contrario: "
              "geometry_max_nfa and geometry_min_overlap) or either of the two"),

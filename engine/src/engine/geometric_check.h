@@ -44,11 +44,11 @@ namespace placedb {
 // Defaults are Options' (geometry_rule, geometry_min_inliers, geometry_max_nfa, ...).
 struct GeometricCheckSettings {
   GeometryRule rule = Options().geometry_rule;
-  int min_inliers = Options().geometry_min_inliers;     // inliers rule: pairs within max_error_px
-  double max_nfa = Options().geometry_max_nfa;          // nfa rule: expected false alarms at most
-  double min_overlap = Options().geometry_min_overlap;  // nfa rule: inliers / keypoints at least
+  int min_inliers = Options().geometry_min_inliers;       // inliers rule: pairs within max_error_px
+  double max_nfa = Options().geometry_max_nfa;            // nfa rule: expected false alarms at most
+  double min_overlap = Options().geometry_min_overlap;    // nfa rule: inliers / keypoints at least
   double max_error_px = Options().geometry_max_error_px;  // farther from the epipolar line: out
-  double match_ratio = Options().geometry_match_ratio;  // nearest / second-nearest distance
+  double match_ratio = Options().geometry_match_ratio;    // nearest / second-nearest distance
   int iterations = 400;  // RANSAC samples at most, per set of correspondences
 };
 

@@ -65,9 +65,11 @@ GeometricView MapImpl::viewOf(const CachedKeypoints& keypoints) const {
 }
 
 bool MapImpl::passesNearLastClosure(const GeometricResult& g) const {
-  const bool by_count = options_.geometry_rule != GeometryRule::kNfa && options_.temporal_min_inliers > 0 &&
+  const bool by_count = options_.geometry_rule != GeometryRule::kNfa &&
+                        options_.temporal_min_inliers > 0 &&
                         g.inliers >= options_.temporal_min_inliers;
-  const bool by_chance = options_.geometry_rule != GeometryRule::kInliers && options_.temporal_max_nfa > 0 &&
+  const bool by_chance = options_.geometry_rule != GeometryRule::kInliers &&
+                         options_.temporal_max_nfa > 0 &&
                          g.log10_nfa <= std::log10(options_.temporal_max_nfa) &&
                          g.inliers >= minimumInliers(options_.temporal_min_overlap, g.keypoints);
   return by_count || by_chance;
@@ -75,8 +77,9 @@ bool MapImpl::passesNearLastClosure(const GeometricResult& g) const {
 
 std::vector<LocationId> MapImpl::nearLastClosure(std::int64_t frame_id) const {
   // Without the geometric check there is no chance level to relax.
-  const bool relaxed = (options_.geometry_rule != GeometryRule::kNfa && options_.temporal_min_inliers > 0) ||
-                       (options_.geometry_rule != GeometryRule::kInliers && options_.temporal_max_nfa > 0);
+  const bool relaxed =
+      (options_.geometry_rule != GeometryRule::kNfa && options_.temporal_min_inliers > 0) ||
+      (options_.geometry_rule != GeometryRule::kInliers && options_.temporal_max_nfa > 0);
   if (!relaxed || !geometricCheckOn(options_) || counters_.last_closure_location == 0) return {};
   if (counters_.last_closure_session != *session_id_ ||
       frame_id - counters_.last_closure_frame > options_.temporal_max_gap)

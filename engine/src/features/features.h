@@ -10,24 +10,24 @@
 namespace placedb {
 
 enum class DescriptorType : std::uint8_t {
-  kFloat32 = 0,  // compared by Euclidean distance (SURF, SIFT, KAZE)
-  kBinary8U = 1, // compared by Hamming distance (ORB); the vocabulary does not support it yet
+  kFloat32 = 0,   // compared by Euclidean distance (SURF, SIFT, KAZE)
+  kBinary8U = 1,  // compared by Hamming distance (ORB); the vocabulary does not support it yet
 };
 
 struct Keypoint {
-  float x = 0, y = 0;    // pixels, sub-pixel
-  float size = 0;        // diameter in pixels, as cv::KeyPoint
-  float angle = -1;      // degrees in [0, 360), -1 when upright
-  float response = 0;    // detector strength (Hessian determinant for SURF)
+  float x = 0, y = 0;  // pixels, sub-pixel
+  float size = 0;      // diameter in pixels, as cv::KeyPoint
+  float angle = -1;    // degrees in [0, 360), -1 when upright
+  float response = 0;  // detector strength (Hessian determinant for SURF)
   int octave = 0;
 };
 
 struct Features {
-  std::string extractor;                    // "surf", "sift", "kaze", "orb"
+  std::string extractor;  // "surf", "sift", "kaze", "orb"
   DescriptorType type = DescriptorType::kFloat32;
-  int dim = 0;                              // floats (or bytes, for binary) per descriptor
-  std::vector<Keypoint> keypoints;          // strongest response first
-  cv::Mat descriptors;                      // keypoints.size() x dim, CV_32F (or CV_8U), continuous
+  int dim = 0;                      // floats (or bytes, for binary) per descriptor
+  std::vector<Keypoint> keypoints;  // strongest response first
+  cv::Mat descriptors;              // keypoints.size() x dim, CV_32F (or CV_8U), continuous
   std::size_t size() const { return keypoints.size(); }
 };
 

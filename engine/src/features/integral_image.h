@@ -27,8 +27,8 @@ class IntegralImage {
   // Sum of pixels [x0, x1) x [y0, y1); the box must lie inside the image.
   int boxSum(int x0, int y0, int x1, int y1) const {
     const std::uint32_t* t = table_.data();
-    const std::uint32_t sum = t[y1 * stride_ + x1] - t[y0 * stride_ + x1] -
-                              t[y1 * stride_ + x0] + t[y0 * stride_ + x0];
+    const std::uint32_t sum =
+        t[y1 * stride_ + x1] - t[y0 * stride_ + x1] - t[y1 * stride_ + x0] + t[y0 * stride_ + x0];
     return static_cast<std::int32_t>(sum);
   }
 

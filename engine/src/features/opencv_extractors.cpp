@@ -20,26 +20,26 @@ Features OpenCvExtractor::extract(const cv::Mat& grey8) const {
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
   detector_->detectAndCompute(grey8, cv::noArray(), keypoints, descriptors);
-  if (keypoints.empty()) descriptors = cv::Mat(0, dim_, type_ == DescriptorType::kFloat32 ? CV_32F : CV_8U);
+  if (keypoints.empty())
+    descriptors = cv::Mat(0, dim_, type_ == DescriptorType::kFloat32 ? CV_32F : CV_8U);
   return makeFeatures(name_, type_, dim_, keypoints, descriptors, options_.max_features,
                       options_.min_response);
 }
 
 SiftExtractor::SiftExtractor(const FeatureOptions& options)
     : OpenCvExtractor(options, "sift", 128, DescriptorType::kFloat32,
-                      cv::SIFT::create(options.max_features, 3, options.sift_contrast_threshold)) {
-}
+                      cv::SIFT::create(options.max_features, 3, options.sift_contrast_threshold)) {}
 
 KazeExtractor::KazeExtractor(const FeatureOptions& options)
-    : OpenCvExtractor(options, "kaze", 64, DescriptorType::kFloat32,
-                      cv::KAZE::create(false, options.upright,
-                                       static_cast<float>(options.kaze_threshold),
-                                       options.octaves)) {}
+    : OpenCvExtractor(
+          options, "kaze", 64, DescriptorType::kFloat32,
+          cv::KAZE::create(false, options.upright, static_cast<float>(options.kaze_threshold),
+                           options.octaves)) {}
 
 OrbExtractor::OrbExtractor(const FeatureOptions& options)
-    : OpenCvExtractor(options, "orb", 32, DescriptorType::kBinary8U,
-                      cv::ORB::create(options.max_features > 0 ? options.max_features : 1000, 1.2f,
-                                      8, 31, 0, 2, cv::ORB::HARRIS_SCORE, 31,
-                                      options.orb_fast_threshold)) {}
+    : OpenCvExtractor(
+          options, "orb", 32, DescriptorType::kBinary8U,
+          cv::ORB::create(options.max_features > 0 ? options.max_features : 1000, 1.2f, 8, 31, 0, 2,
+                          cv::ORB::HARRIS_SCORE, 31, options.orb_fast_threshold)) {}
 
 }  // namespace placedb

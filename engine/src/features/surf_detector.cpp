@@ -104,9 +104,9 @@ class HessianBoxes {
         static_cast<std::int32_t>(dyy_whole_.sum(centre) - 3u * dyy_middle_.sum(centre));
     const auto dxx_int =
         static_cast<std::int32_t>(dxx_whole_.sum(centre) - 3u * dxx_middle_.sum(centre));
-    const auto dxy_int = static_cast<std::int32_t>(
-        dxy_top_left_.sum(centre) + dxy_bottom_right_.sum(centre) - dxy_top_right_.sum(centre) -
-        dxy_bottom_left_.sum(centre));
+    const auto dxy_int =
+        static_cast<std::int32_t>(dxy_top_left_.sum(centre) + dxy_bottom_right_.sum(centre) -
+                                  dxy_top_right_.sum(centre) - dxy_bottom_left_.sum(centre));
     dxx = static_cast<float>(dxx_int) * inv_lobe_area_;
     dyy = static_cast<float>(dyy_int) * inv_lobe_area_;
     dxy = static_cast<float>(dxy_int) * inv_lobe_area_ * dxy_weight_;
@@ -193,15 +193,13 @@ bool interpolateExtremum(const ResponseLayer& below, const ResponseLayer& middle
   const double dxx = middle.at(r, c + 1) - 2 * v + middle.at(r, c - 1);
   const double dyy = middle.at(r + 1, c) - 2 * v + middle.at(r - 1, c);
   const double dss = above.at(r, c) - 2 * v + below.at(r, c);
-  const double dxy = (middle.at(r + 1, c + 1) - middle.at(r + 1, c - 1) -
-                      middle.at(r - 1, c + 1) + middle.at(r - 1, c - 1)) /
+  const double dxy = (middle.at(r + 1, c + 1) - middle.at(r + 1, c - 1) - middle.at(r - 1, c + 1) +
+                      middle.at(r - 1, c - 1)) /
                      4.0;
-  const double dxs = (above.at(r, c + 1) - above.at(r, c - 1) - below.at(r, c + 1) +
-                      below.at(r, c - 1)) /
-                     4.0;
-  const double dys = (above.at(r + 1, c) - above.at(r - 1, c) - below.at(r + 1, c) +
-                      below.at(r - 1, c)) /
-                     4.0;
+  const double dxs =
+      (above.at(r, c + 1) - above.at(r, c - 1) - below.at(r, c + 1) + below.at(r, c - 1)) / 4.0;
+  const double dys =
+      (above.at(r + 1, c) - above.at(r - 1, c) - below.at(r + 1, c) + below.at(r - 1, c)) / 4.0;
   const double hessian[3][3] = {{dxx, dxy, dxs}, {dxy, dyy, dys}, {dxs, dys, dss}};
   const double rhs[3] = {-gradient[0], -gradient[1], -gradient[2]};
   double offset[3];
@@ -212,8 +210,8 @@ bool interpolateExtremum(const ResponseLayer& below, const ResponseLayer& middle
   const double step = middle.step;
   keypoint.pt.x = static_cast<float>((c + offset[0]) * step);
   keypoint.pt.y = static_cast<float>((r + offset[1]) * step);
-  keypoint.size = static_cast<float>(middle.filter_size +
-                                     offset[2] * (above.filter_size - middle.filter_size));
+  keypoint.size =
+      static_cast<float>(middle.filter_size + offset[2] * (above.filter_size - middle.filter_size));
   keypoint.response = static_cast<float>(
       v + 0.5 * (gradient[0] * offset[0] + gradient[1] * offset[1] + gradient[2] * offset[2]));
   keypoint.angle = -1;

@@ -15,7 +15,7 @@ namespace placedb {
 struct SurfDetectorSettings {
   double hessian_threshold = 500.0;
   int octaves = 4;
-  int intervals = 2;  // scales searched per octave; intervals + 2 filters are evaluated
+  int intervals = 2;        // scales searched per octave; intervals + 2 filters are evaluated
   double edge_ratio = 5.0;  // maxima with a larger principal curvature ratio are dropped; 0: off
   int threads = 1;
 };
