@@ -6,6 +6,18 @@
 
 namespace placedb::storage {
 
+const char* toString(Tier tier) {
+  switch (tier) {
+    case Tier::kStm:
+      return "stm";
+    case Tier::kWm:
+      return "wm";
+    case Tier::kLtm:
+      return "ltm";
+  }
+  return "?";
+}
+
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
 #error "descriptor blobs are stored little-endian; add byte swapping for this platform"
 #endif

@@ -186,5 +186,28 @@ TEST(GeometricCheck, TheSameViewAgainPasses) {
   EXPECT_GE(r.inliers, static_cast<int>(v.query.points.size()) / 2);
 }
 
+TEST(GeometricCheck, ExhaustiveCountsEveryInlierForRanking) {
+  // Mapping stops at the first model that meets the rule; ranking candidates (query) needs the
+  // whole count, or every passing candidate would tie near min_inliers.
+  std::mt19937 rng(37);
+  TwoViews v = rigidScene(rng);
+  // A quarter of the keypoints share a word: enough to pass on words alone.
+  for (std::size_t i = 0; i < v.query.points.size(); ++i) {
+    const std::int64_t word = i < v.query.points.size() / 4 ? 1000 + std::int64_t(i) : -1;
+    v.query.words.push_back(word);
+    v.candidate.words.push_back(word);
+  }
+  GeometricCheckSettings settings;
+  settings.rule = GeometryRule::kInliers;
+  const GeometricResult quick = checkGeometry(v.query, v.candidate, settings);
+  settings.exhaustive = true;
+  const GeometricResult full = checkGeometry(v.query, v.candidate, settings);
+  ASSERT_TRUE(quick.passed);
+  EXPECT_TRUE(full.passed);
+  EXPECT_GE(full.inliers, quick.inliers);
+  EXPECT_LT(quick.inliers, static_cast<int>(v.query.points.size()) / 2) << "words alone";
+  EXPECT_GT(full.inliers, static_cast<int>(v.query.points.size()) * 3 / 4);
+}
+
 }  // namespace
 }  // namespace placedb

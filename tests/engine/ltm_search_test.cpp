@@ -10,16 +10,12 @@
 #include <opencv2/imgproc.hpp>
 
 #include "engine_fixture.h"
+#include "file_bytes.h"
 #include "memory/place_code.h"
 #include "memory/place_index.h"
 
 namespace placedb::testing {
 namespace {
-
-std::string fileBytes(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 class LtmSearchTest : public ::testing::Test {
  protected:
@@ -51,7 +47,7 @@ TEST_F(LtmSearchTest, QueryFindsPlacesThatMovedToLongTermMemory) {
   options.wm_max = 8;
   mapFirst(44, options);
   ASSERT_GE(sqlCount(path_, "SELECT count(*) FROM locations WHERE tier = 2"), 10);
-  const std::string before = fileBytes(path_);
+  const std::string before = readBytes(path_);
 
   auto map = Map::open(path_.string(), options, Map::Mode::kLocalisation);
   std::size_t found = 0, found_in_ltm = 0, asked = 0;
@@ -69,7 +65,7 @@ TEST_F(LtmSearchTest, QueryFindsPlacesThatMovedToLongTermMemory) {
   EXPECT_GE(found, asked - 2) << "the revisited place is the best match, verified";
   EXPECT_GE(found_in_ltm, 4u) << "places in LTM are found too (before, only STM and WM were)";
   map.reset();
-  EXPECT_EQ(fileBytes(path_), before) << "localisation must leave the map byte-identical";
+  EXPECT_EQ(readBytes(path_), before) << "localisation must leave the map byte-identical";
 }
 
 TEST_F(LtmSearchTest, AnImageOfNoStoredPlaceIsUnknown) {

@@ -17,18 +17,6 @@
 namespace placedb::cli {
 namespace {
 
-const char* tierName(storage::Tier tier) {
-  switch (tier) {
-    case storage::Tier::kStm:
-      return "stm";
-    case storage::Tier::kWm:
-      return "wm";
-    case storage::Tier::kLtm:
-      return "ltm";
-  }
-  return "?";
-}
-
 const char* linkName(storage::LinkType type) {
   switch (type) {
     case storage::LinkType::kNeighbour:
@@ -73,7 +61,7 @@ nlohmann::json inspectMap(const std::string& path) {
   std::int64_t locations = 0;
   for (auto tier : {storage::Tier::kStm, storage::Tier::kWm, storage::Tier::kLtm}) {
     auto in_tier = store.locationsInTier(tier);
-    tiers[tierName(tier)] = in_tier.size();
+    tiers[storage::toString(tier)] = in_tier.size();
     locations += static_cast<std::int64_t>(in_tier.size());
     for (const auto& l : in_tier)
       if (auto record = store.location(l.id)) session_of[l.id] = record->session_id;

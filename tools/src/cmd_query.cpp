@@ -32,10 +32,6 @@ Options storedOptions(const std::string& map_path) {
   return Options::fromSettings(store.settings(last->id));
 }
 
-const char* tierName(Tier tier) {
-  return tier == Tier::kStm ? "stm" : tier == Tier::kWm ? "wm" : "ltm";
-}
-
 nlohmann::json framesJson(const std::vector<FrameRef>& frames) {
   nlohmann::json list = nlohmann::json::array();
   for (const auto& f : frames)
@@ -76,7 +72,7 @@ int runQuery(const QueryRequest& request) {
       nlohmann::json matches = nlohmann::json::array();
       for (const auto& m : result.matches)
         matches.push_back({{"location", m.location_id},
-                           {"tier", tierName(m.tier)},
+                           {"tier", storage::toString(m.tier)},
                            {"similarity", m.similarity},
                            {"code_similarity", m.code_similarity},
                            {"inliers", m.inliers},
@@ -100,7 +96,7 @@ int runQuery(const QueryRequest& request) {
       text += fmt::format(
           "  {}. location {} ({})  inliers {}{}  code similarity {:.3f}  similarity {:.4f}  "
           "({} frame{})\n",
-          i + 1, m.location_id, tierName(m.tier), m.inliers, m.verified ? " verified" : "",
+          i + 1, m.location_id, storage::toString(m.tier), m.inliers, m.verified ? " verified" : "",
           m.code_similarity, m.similarity, m.frames.size(), m.frames.size() == 1 ? "" : "s");
       for (const auto& f : m.frames)
         text += fmt::format("       session {} frame {}  {}\n", f.session_id, f.source_index,

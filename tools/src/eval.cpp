@@ -12,16 +12,10 @@
 #include <sstream>
 
 #include "placedb/error.h"
+#include "text_file.h"
 
 namespace placedb::cli {
 namespace {
-
-std::string trim(const std::string& text) {
-  std::size_t first = 0, last = text.size();
-  while (first < last && std::isspace(static_cast<unsigned char>(text[first]))) ++first;
-  while (last > first && std::isspace(static_cast<unsigned char>(text[last - 1]))) --last;
-  return text.substr(first, last - first);
-}
 
 // Python's int(): surrounding blanks allowed, the rest must be a decimal integer.
 std::int64_t parseInt(const std::string& text, const std::string& what) {

@@ -14,18 +14,6 @@
 namespace placedb::cli {
 namespace {
 
-const char* tierName(storage::Tier tier) {
-  switch (tier) {
-    case storage::Tier::kStm:
-      return "stm";
-    case storage::Tier::kWm:
-      return "wm";
-    case storage::Tier::kLtm:
-      return "ltm";
-  }
-  return "?";
-}
-
 const char* linkTypeName(storage::LinkType type) {
   switch (type) {
     case storage::LinkType::kNeighbour:
@@ -167,7 +155,7 @@ MapGraph readMapGraph(const std::string& map_path) {
       GraphLocation location;
       location.id = l.id;
       location.weight = l.weight;
-      location.tier = tierName(tier);
+      location.tier = storage::toString(tier);
       if (auto record = store.location(l.id)) location.session_id = record->session_id;
       graph.locations.push_back(location);
     }

@@ -11,13 +11,6 @@
 namespace placedb::cli {
 namespace {
 
-std::string trim(const std::string& text) {
-  std::size_t first = 0, last = text.size();
-  while (first < last && std::isspace(static_cast<unsigned char>(text[first]))) ++first;
-  while (last > first && std::isspace(static_cast<unsigned char>(text[last - 1]))) --last;
-  return text.substr(first, last - first);
-}
-
 Settings parseJsonConfig(const std::string& content, const std::string& name) {
   nlohmann::json doc;
   try {

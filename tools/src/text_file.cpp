@@ -1,6 +1,7 @@
 #include "text_file.h"
 
 #include <fmt/format.h>
+#include <cctype>
 
 #include <fstream>
 #include <iterator>
@@ -8,6 +9,13 @@
 #include "placedb/error.h"
 
 namespace placedb::cli {
+
+std::string trim(const std::string& text) {
+  std::size_t first = 0, last = text.size();
+  while (first < last && std::isspace(static_cast<unsigned char>(text[first]))) ++first;
+  while (last > first && std::isspace(static_cast<unsigned char>(text[last - 1]))) --last;
+  return text.substr(first, last - first);
+}
 
 std::string withoutByteOrderMark(std::string content) {
   if (content.compare(0, 3, "\xEF\xBB\xBF") == 0) content.erase(0, 3);

@@ -176,8 +176,8 @@ GeometricResult fit(const Pairs& pairs, cv::Size2f extent, int keypoints,
   fs.max_nfa = s.max_nfa;
   fs.max_error_px = s.max_error_px;
   const bool count = s.rule != GeometryRule::kNfa, chance = s.rule != GeometryRule::kInliers;
-  fs.stop_when_passed = chance;
-  fs.stop_at_inliers = count ? s.min_inliers : 0;
+  fs.stop_when_passed = chance && !s.exhaustive;
+  fs.stop_at_inliers = count && !s.exhaustive ? s.min_inliers : 0;
   const EpipolarFit f = fitEpipolar(pairs.a, pairs.b, extent, fs);
   r.log10_nfa = f.log10_nfa;
   r.inliers = count ? f.most_within_max_error : f.inliers;
@@ -217,10 +217,8 @@ GeometricResult checkGeometry(const GeometricView& query, const GeometricView& c
   const int keypoints = static_cast<int>(std::min(query.points.size(), candidate.points.size()));
   const Pairs words = wordPairs(query, candidate);
   GeometricResult by_words = fit(words, extent, keypoints, settings);
-  if (by_words.passed) {
-    by_words.from_words = true;
-    return by_words;
-  }
+  if (by_words.passed) by_words.from_words = true;
+  if (by_words.passed && !settings.exhaustive) return by_words;
   const GeometricResult by_descriptors = fit(
       descriptorPairs(query, candidate, words, settings.match_ratio), extent, keypoints, settings);
   return strongerThan(by_words, by_descriptors, settings.rule) ? by_words : by_descriptors;

@@ -50,6 +50,10 @@ struct GeometricCheckSettings {
   double max_error_px = Options().geometry_max_error_px;  // farther from the epipolar line: out
   double match_ratio = Options().geometry_match_ratio;    // nearest / second-nearest distance
   int iterations = 400;  // RANSAC samples at most, per set of correspondences
+  // Off (mapping): stop as soon as the rule is met, so the inliers counted can stop there too.
+  // On (ranking several candidates, as query does): no early exit, and both the word pairs and
+  // the descriptor matches are fitted, so counts compare across candidates.
+  bool exhaustive = false;
 };
 
 struct GeometricResult {

@@ -44,7 +44,8 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
   QueryResult result;
   Features features = extractor_->extract(toGrey8(image));
   result.feature_count = features.size();
-  const GeometricCheckSettings geometry = toGeometricCheckSettings(options_);
+  GeometricCheckSettings geometry = toGeometricCheckSettings(options_);
+  geometry.exhaustive = true;  // candidates are ranked by their inliers
   const bool check_on = geometricCheckOn(options_);
   result.verdict = check_on ? QueryVerdict::kUnknown : QueryVerdict::kUnverified;
   if (features.size() == 0 || vocabulary_->size() == 0) return result;

@@ -15,18 +15,6 @@ namespace {
 std::string idText(MemoryLocationId id) { return std::to_string(id); }
 }  // namespace
 
-const char* toString(Tier tier) {
-  switch (tier) {
-    case Tier::kStm:
-      return "stm";
-    case Tier::kWm:
-      return "wm";
-    case Tier::kLtm:
-      return "ltm";
-  }
-  return "unknown";
-}
-
 Tier parseTier(const std::string& name) {
   if (name == "stm") return Tier::kStm;
   if (name == "wm") return Tier::kWm;

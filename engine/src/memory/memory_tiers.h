@@ -34,7 +34,7 @@ namespace placedb {
 
 using MemoryLocationId = std::int64_t;
 
-const char* toString(Tier tier);
+using storage::toString;                  // "stm", "wm", "ltm"
 Tier parseTier(const std::string& name);  // "stm", "wm", "ltm"; kInvalidArgument otherwise
 
 // Defaults are Options' (stm_size, wm_max, t_time_ms, wm_immune_newest, wm_recent_ratio,

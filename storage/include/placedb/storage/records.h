@@ -11,6 +11,7 @@ namespace placedb::storage {
 // Where a location is: short-term, working or long-term memory (the engine's MemoryTiers use
 // this same enum; the numbers are what the locations table stores).
 enum class Tier : std::uint8_t { kStm = 0, kWm = 1, kLtm = 2 };
+const char* toString(Tier tier);  // "stm", "wm", "ltm"
 enum class FrameOutcome : int { kNewLocation = 0, kMerged = 1, kBad = 2 };
 enum class LinkType : int { kNeighbour = 0, kLoopClosure = 1, kMerge = 2 };
 enum class VocabularyMode : int { kFixed = 0, kSeed = 1 };
