@@ -110,40 +110,41 @@ TEST(MemoryTiers, TransfersLowestWeightThenOldestAndRespectsImmunity) {
   EXPECT_EQ(m.checkInvariants(), "");
 }
 
+// 14 locations through an STM of size 0, so all in WM.
+MemoryTiers fourteenInWm(const MemorySettings& s) {
+  MemoryTiers m(s);
+  for (MemoryLocationId id = 0; id < 14; ++id) m.push(id);
+  return m;
+}
+
 TEST(MemoryTiers, PlannedTransfersFollowSizeAndTimeTriggers) {
   MemorySettings s;
   s.time_floor = 0;
   s.stm_size = 0;
   s.wm_max = 10;
   s.time_limit_s = 0.7;
-  MemoryTiers m(s);
-  for (MemoryLocationId id = 0; id < 14; ++id) m.push(id);
+  MemoryTiers m = fourteenInWm(s);
   EXPECT_EQ(m.plannedTransfers(0.1), 4u);  // 14 - 10, time fine
   // 1.4 s against 0.7 s: half the time is excess, so ceil(14 x 0.5) = 7 (> 4).
   EXPECT_EQ(m.plannedTransfers(1.4), 7u);
   // Barely over the limit still moves at least one.
   s.wm_max = 0;
-  MemoryTiers timed(s);
-  for (MemoryLocationId id = 0; id < 14; ++id) timed.push(id);
+  MemoryTiers timed = fourteenInWm(s);
   EXPECT_EQ(timed.plannedTransfers(0.7001), 1u);
   EXPECT_EQ(timed.plannedTransfers(0.7), 0u);
   s.max_transfers_per_frame = 3;
-  MemoryTiers capped(s);
-  for (MemoryLocationId id = 0; id < 14; ++id) capped.push(id);
+  MemoryTiers capped = fourteenInWm(s);
   EXPECT_EQ(capped.plannedTransfers(1.4), 3u);
   // The time trigger never takes WM below its floor; the size trigger is not bound by it.
   s.max_transfers_per_frame = 0;
   s.time_floor = 12;
-  MemoryTiers floored(s);
-  for (MemoryLocationId id = 0; id < 14; ++id) floored.push(id);
+  MemoryTiers floored = fourteenInWm(s);
   EXPECT_EQ(floored.plannedTransfers(1.4), 2u);
   s.time_floor = 20;
-  MemoryTiers under(s);
-  for (MemoryLocationId id = 0; id < 14; ++id) under.push(id);
+  MemoryTiers under = fourteenInWm(s);
   EXPECT_EQ(under.plannedTransfers(10.0), 0u);
   s.wm_max = 10;
-  MemoryTiers sized(s);
-  for (MemoryLocationId id = 0; id < 14; ++id) sized.push(id);
+  MemoryTiers sized = fourteenInWm(s);
   EXPECT_EQ(sized.plannedTransfers(10.0), 4u);
 }
 
