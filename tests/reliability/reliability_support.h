@@ -65,13 +65,15 @@ struct StoredFrame {
 };
 
 // By source index, over every session of the map.
-// Schema objects in the file: 0 when a writer was killed after creating it, before its schema.
-inline int schemaObjects(const std::filesystem::path& map) {
+// The file's schema version (PRAGMA user_version): below the current one when a writer was
+// killed while making the map, before its last migration (each commits on its own) and so
+// before any frame.
+inline int schemaVersion(const std::filesystem::path& map) {
   sqlite3* db = nullptr;
   int count = -1;
   if (sqlite3_open_v2(map.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK)
     sqlite3_exec(
-        db, "SELECT count(*) FROM sqlite_master",
+        db, "PRAGMA user_version",
         [](void* out, int, char** values, char**) {
           *static_cast<int*>(out) = values[0] ? std::atoi(values[0]) : -1;
           return 0;
@@ -83,8 +85,8 @@ inline int schemaObjects(const std::filesystem::path& map) {
 
 inline std::map<std::int64_t, StoredFrame> storedFrames(const std::filesystem::path& map) {
   std::map<std::int64_t, StoredFrame> out;
-  // A blank SQLite file holds no frame (a read-only open refuses it as not yet a map).
-  if (schemaObjects(map) == 0) return out;
+  // A map not fully made holds no frame (and a read-only open refuses it).
+  if (schemaVersion(map) < storage::MapStore::currentSchemaVersion()) return out;
   storage::MapStore store(map.string(), storage::OpenMode::kReadOnly);
   for (const auto& session : store.sessions())
     for (const auto& f : store.frames(session.id)) {
