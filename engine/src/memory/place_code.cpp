@@ -181,15 +181,17 @@ std::vector<std::int8_t> PlaceCoder::encode(const cv::Mat& descriptors) const {
   return code;
 }
 
+std::int32_t codeDot(const std::int8_t* a, const std::int8_t* b, std::size_t code_dim) {
+  std::int32_t dot = 0;
+  for (std::size_t i = 0; i < code_dim; ++i) dot += std::int32_t(a[i]) * b[i];
+  return dot;
+}
+
 double codeSimilarity(const std::int8_t* a, const std::int8_t* b, int code_dim) {
-  std::int64_t dot = 0, na = 0, nb = 0;
-  for (int i = 0; i < code_dim; ++i) {
-    dot += std::int32_t(a[i]) * b[i];
-    na += std::int32_t(a[i]) * a[i];
-    nb += std::int32_t(b[i]) * b[i];
-  }
+  const auto n = static_cast<std::size_t>(code_dim);
+  const std::int32_t na = codeDot(a, a, n), nb = codeDot(b, b, n);
   if (na == 0 || nb == 0) return 0.0;
-  return double(dot) / std::sqrt(double(na) * double(nb));
+  return double(codeDot(a, b, n)) / std::sqrt(double(na) * double(nb));
 }
 
 }  // namespace placedb

@@ -17,6 +17,7 @@
 // The K centres come from the first location a map stores (deterministic k-means over its
 // descriptors); they are kept in the map so that every later code, resumed or not, is made
 // with the same ones.
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -54,6 +55,10 @@ class PlaceCoder {
   cv::Mat centres_;                 // K x dim, CV_32F
   std::vector<std::int8_t> signs_;  // code_dim x (K x dim) projection, +-1
 };
+
+// Dot product of two codes of `code_dim` bytes: exact in 32 bits for every code_dim PlaceCoder
+// accepts (65536 x 127^2 < 2^31).
+std::int32_t codeDot(const std::int8_t* a, const std::int8_t* b, std::size_t code_dim);
 
 // Cosine similarity of two codes of the same length, in [-1, 1]; 0 when either is all zeros.
 double codeSimilarity(const std::int8_t* a, const std::int8_t* b, int code_dim);

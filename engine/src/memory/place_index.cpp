@@ -1,5 +1,7 @@
 #include "memory/place_index.h"
 
+#include "memory/place_code.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -9,9 +11,7 @@ namespace placedb {
 namespace {
 
 double norm(const std::int8_t* code, std::size_t dim) {
-  std::int64_t sum = 0;
-  for (std::size_t i = 0; i < dim; ++i) sum += std::int32_t(code[i]) * code[i];
-  return std::sqrt(double(sum));
+  return std::sqrt(double(codeDot(code, code, dim)));
 }
 
 bool better(const PlaceMatch& a, const PlaceMatch& b) {
@@ -51,9 +51,7 @@ double PlaceIndex::similarity(const std::vector<std::int8_t>& code, std::int64_t
   const double n = norm(code.data(), dim_);
   if (n == 0 || norms_[it->second] == 0) return 0.0;
   const std::int8_t* stored = codes_.data() + it->second * dim_;
-  std::int32_t dot = 0;
-  for (std::size_t i = 0; i < dim_; ++i) dot += std::int32_t(stored[i]) * code[i];
-  return double(dot) / (norms_[it->second] * n);
+  return double(codeDot(stored, code.data(), dim_)) / (norms_[it->second] * n);
 }
 
 std::vector<PlaceMatch> PlaceIndex::search(const std::vector<std::int8_t>& code, std::size_t k,
@@ -66,9 +64,8 @@ std::vector<PlaceMatch> PlaceIndex::search(const std::vector<std::int8_t>& code,
   for (std::size_t row = 0; row < ids_.size(); ++row) {
     if (norms_[row] == 0 || !admit(ids_[row])) continue;
     const std::int8_t* stored = codes_.data() + row * dim_;
-    std::int32_t dot = 0;
-    for (std::size_t i = 0; i < dim_; ++i) dot += std::int32_t(stored[i]) * code[i];
-    const PlaceMatch m{ids_[row], double(dot) / (norms_[row] * query_norm)};
+    const PlaceMatch m{ids_[row],
+                       double(codeDot(stored, code.data(), dim_)) / (norms_[row] * query_norm)};
     if (best.size() == k && !better(m, best.back())) continue;
     best.insert(std::upper_bound(best.begin(), best.end(), m, better), m);
     if (best.size() > k) best.pop_back();
