@@ -59,6 +59,33 @@ TEST(LinkGraph, LoopClosureLinksShortenDistances) {
   EXPECT_THROW(g.addLink(3, 3), Error);
 }
 
+TEST(LinkGraph, NeighbourWalkStaysOnItsTraversal) {
+  // Two traversals of one street, 0..9 and 20..29, joined where 25 closed a loop on 5.
+  LinkGraph g;
+  for (LocationId id = 1; id < 10; ++id) g.addLink(id - 1, id);
+  for (LocationId id = 21; id < 30; ++id) g.addLink(id - 1, id);
+  g.addLink(25, 5, LinkKind::kLoopClosure);
+  const auto ids = [](const std::vector<std::pair<LocationId, int>>& reach) {
+    std::vector<LocationId> out;
+    for (const auto& [id, depth] : reach) out.push_back(id);
+    return out;
+  };
+  EXPECT_EQ(ids(g.withinLinks(25, 2, nullptr, LinkWalk::kNeighbourLinksOnly)),
+            (std::vector<LocationId>{23, 24, 25, 26, 27}));
+  EXPECT_EQ(ids(g.withinLinks(25, 1)), (std::vector<LocationId>{5, 24, 25, 26}));
+
+  // The same pair linked again as neighbours is walked; a removed link is forgotten.
+  g.addLink(5, 25, LinkKind::kNeighbour);
+  EXPECT_EQ(ids(g.withinLinks(25, 1, nullptr, LinkWalk::kNeighbourLinksOnly)),
+            (std::vector<LocationId>{5, 24, 25, 26}));
+  g.removeLink(5, 25);
+  g.addLink(5, 25, LinkKind::kLoopClosure);
+  g.removeNode(5);
+  g.addLink(5, 25);
+  EXPECT_EQ(ids(g.withinLinks(25, 1, nullptr, LinkWalk::kNeighbourLinksOnly)),
+            (std::vector<LocationId>{5, 24, 25, 26}));
+}
+
 TEST(TransitionModel, RowsSumToOneOnChainTreeAndRandomGraphs) {
   const BayesFilterSettings settings;
   const TransitionModel model(settings);

@@ -24,6 +24,11 @@
 
 namespace placedb {
 
+// The graph's kind of a stored link (merge links never enter the graph).
+inline LinkKind linkKindOf(storage::LinkType type) {
+  return type == storage::LinkType::kLoopClosure ? LinkKind::kLoopClosure : LinkKind::kNeighbour;
+}
+
 class MapImpl final : public Map {
  public:
   MapImpl(const std::string& path, const Options& options, Mode mode);

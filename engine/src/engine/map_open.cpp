@@ -138,7 +138,7 @@ void MapImpl::restoreFromStore() {
     for (const auto& link : store_->links(id)) {
       std::int64_t other = link.location_a == id ? link.location_b : link.location_a;
       if (link.type != storage::LinkType::kMerge && live_set.count(other))
-        graph_.addLink(id, other);
+        graph_.addLink(id, other, linkKindOf(link.type));
     }
   }
 

@@ -260,7 +260,7 @@ void MapImpl::acceptLoopClosure(std::int64_t hypothesis, bool temporal, FrameRes
   if (hypothesis != r.location_id) {
     w.links.push_back(
         link(r.location_id, hypothesis, storage::LinkType::kLoopClosure, r.hypothesis.score));
-    graph_.addLink(r.location_id, hypothesis);
+    graph_.addLink(r.location_id, hypothesis, LinkKind::kLoopClosure);
   }
 }
 
@@ -329,7 +329,8 @@ void MapImpl::bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write,
     graph_.addNode(id);
     for (const auto& l : store_->links(id)) {
       std::int64_t other = l.location_a == id ? l.location_b : l.location_a;
-      if (l.type != storage::LinkType::kMerge && graph_.hasNode(other)) graph_.addLink(id, other);
+      if (l.type != storage::LinkType::kMerge && graph_.hasNode(other))
+        graph_.addLink(id, other, linkKindOf(l.type));
     }
   }
   tiers_->retrieveToWm(ids);

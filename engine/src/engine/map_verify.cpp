@@ -6,6 +6,7 @@
 #include <optional>
 #include <set>
 
+#include "engine/candidate_choice.h"
 #include "engine/map_impl.h"
 #include "engine/option_mapping.h"
 
@@ -88,8 +89,11 @@ std::vector<LocationId> MapImpl::nearLastClosure(std::int64_t frame_id) const {
   const auto inWm = [this](LocationId id) {
     return tiers_->contains(id) && tiers_->tierOf(id) == Tier::kWm;
   };
+  // Along the traversal only: through a loop-closure link the walk would reach another visit of
+  // the place, whose offset from this one adds to the closure's own.
   for (const auto& [id, depth] :
-       graph_.withinLinks(counters_.last_closure_location, options_.temporal_radius, inWm))
+       graph_.withinLinks(counters_.last_closure_location, options_.temporal_radius, inWm,
+                          LinkWalk::kNeighbourLinksOnly))
     near.push_back(id);  // sorted by id
   return near;
 }
@@ -156,9 +160,8 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   keypoint_cache_.retainIf(
       [this](LocationId id) { return tiers_->contains(id) && tiers_->tierOf(id) == Tier::kWm; });
 
-  // Most likely first: the filter's choice, then by similarity. The first candidate that passes
-  // on its own ends the search; a candidate near the last closure that passes only on the
-  // relaxed chance level waits until every candidate has failed the strict one.
+  // Most likely first: the filter's choice, then by similarity (candidate_choice.h says how
+  // the first pass ends the search).
   std::vector<std::pair<double, LocationId>> order;
   for (std::size_t i = 1; i < candidates.size(); ++i)
     order.emplace_back(-similarityOf(similarities, candidates[i]), candidates[i]);
@@ -170,38 +173,22 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   query.points.reserve(features.size());
   for (const auto& k : features.keypoints) query.points.emplace_back(k.x, k.y);
   query.words = word_of_feature;
-  std::optional<GeometricResult> best, best_near;
-  LocationId near_location = kNewPlace;
-  for (LocationId c : candidates) {
-    const CachedKeypoints& keypoints = keypointsOf(c);
-    if (keypoints.points.empty()) continue;
-    ++v.checked;
-    const GeometricResult g = checkGeometry(query, viewOf(keypoints), geometry);
-    if (!best || strongerThan(g, *best, geometry.rule)) {
-      best = g;
-      v.location = c;
-    }
-    if (g.passed) break;
-    if ((!best_near || strongerThan(g, *best_near, geometry.rule)) &&
-        std::binary_search(near.begin(), near.end(), c)) {
-      best_near = g;
-      near_location = c;
-    }
-  }
-  if (best) {
-    v.passed = best->passed;
-    v.inliers = best->inliers;
-    v.matches = best->matches;
-    v.log10_nfa = std::min(best->log10_nfa, kNoModel);
-  }
-  if (!v.passed && best_near && passesNearLastClosure(*best_near)) {
-    // Too weak for a place on its own, not for one that continues the last closure.
-    v.location = near_location;
-    v.inliers = best_near->inliers;
-    v.matches = best_near->matches;
-    v.log10_nfa = std::min(best_near->log10_nfa, kNoModel);
-    v.passed = true;
-    v.temporal = true;
+  const CandidateChoice choice = chooseCandidate(
+      candidates, near, geometry.rule,
+      [&](LocationId c) -> std::optional<GeometricResult> {
+        const CachedKeypoints& keypoints = keypointsOf(c);
+        if (keypoints.points.empty()) return std::nullopt;
+        return checkGeometry(query, viewOf(keypoints), geometry);
+      },
+      [this](const GeometricResult& g) { return passesNearLastClosure(g); });
+  v.checked = choice.checked;
+  if (choice.result) {
+    v.location = choice.location;
+    v.passed = choice.passed;
+    v.temporal = choice.temporal;
+    v.inliers = choice.result->inliers;
+    v.matches = choice.result->matches;
+    v.log10_nfa = std::min(choice.result->log10_nfa, kNoModel);
   }
   return v;
 }

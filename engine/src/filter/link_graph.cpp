@@ -14,17 +14,24 @@ void LinkGraph::addNode(LocationId id) { adjacency_[id]; }
 void LinkGraph::removeNode(LocationId id) {
   auto it = adjacency_.find(id);
   if (it == adjacency_.end()) return;
-  for (LocationId other : it->second) adjacency_[other].erase(id);
+  for (LocationId other : it->second) {
+    adjacency_[other].erase(id);
+    loop_closures_.erase(std::minmax(id, other));
+  }
   adjacency_.erase(it);
 }
 
-void LinkGraph::addLink(LocationId a, LocationId b) {
+void LinkGraph::addLink(LocationId a, LocationId b, LinkKind kind) {
   if (a == b) {
     throw Error(ErrorCode::kInvalidArgument,
                 "link graph: self-link on location " + std::to_string(a) + " refused");
   }
   adjacency_[a].insert(b);
   adjacency_[b].insert(a);
+  if (kind == LinkKind::kLoopClosure)
+    loop_closures_.insert(std::minmax(a, b));
+  else
+    loop_closures_.erase(std::minmax(a, b));
 }
 
 void LinkGraph::removeLink(LocationId a, LocationId b) {
@@ -32,6 +39,11 @@ void LinkGraph::removeLink(LocationId a, LocationId b) {
   if (ia != adjacency_.end()) ia->second.erase(b);
   auto ib = adjacency_.find(b);
   if (ib != adjacency_.end()) ib->second.erase(a);
+  loop_closures_.erase(std::minmax(a, b));
+}
+
+bool LinkGraph::isLoopClosure(LocationId a, LocationId b) const {
+  return loop_closures_.count(std::minmax(a, b)) != 0;
 }
 
 bool LinkGraph::hasLink(LocationId a, LocationId b) const {
@@ -52,7 +64,8 @@ const std::set<LocationId>& LinkGraph::neighbourSet(LocationId id) const {
 }
 
 std::vector<std::pair<LocationId, int>> LinkGraph::withinLinks(LocationId start, int max_depth,
-                                                               const NodeFilter& allowed) const {
+                                                               const NodeFilter& allowed,
+                                                               LinkWalk walk) const {
   std::vector<std::pair<LocationId, int>> found;
   if (max_depth < 0 || adjacency_.count(start) == 0) return found;
   if (allowed && !allowed(start)) return found;
@@ -67,6 +80,7 @@ std::vector<std::pair<LocationId, int>> LinkGraph::withinLinks(LocationId start,
     for (LocationId next : adjacency_.at(node)) {
       if (depth_of.count(next) != 0) continue;
       if (allowed && !allowed(next)) continue;
+      if (walk == LinkWalk::kNeighbourLinksOnly && isLoopClosure(node, next)) continue;
       depth_of.emplace(next, depth + 1);
       frontier.push_back(next);
     }

@@ -12,14 +12,19 @@
 
 namespace placedb {
 
+// Neighbour links join a traversal's consecutive locations; loop-closure links join two visits.
+enum class LinkKind { kNeighbour, kLoopClosure };
+// Which links a walk follows.
+enum class LinkWalk { kAnyLink, kNeighbourLinksOnly };
+
 class LinkGraph {
  public:
   void addNode(LocationId id);  // no-op when present
   // Drops the node and every link touching it; no-op when absent.
   void removeNode(LocationId id);
   // Adds both nodes if needed. Self-links are refused (kInvalidArgument): a location is always
-  // at distance 0 of itself anyway.
-  void addLink(LocationId a, LocationId b);
+  // at distance 0 of itself anyway. A link added again takes the later kind.
+  void addLink(LocationId a, LocationId b, LinkKind kind = LinkKind::kNeighbour);
   void removeLink(LocationId a, LocationId b);
 
   bool hasNode(LocationId id) const { return adjacency_.count(id) != 0; }
@@ -33,13 +38,17 @@ class LinkGraph {
   // Nodes within max_depth links of start (start itself at depth 0), walking only through nodes
   // the filter accepts (start included: nothing is returned when start is refused or absent).
   // Sorted by node id. Neighbours are expanded in id order, so the result never depends on the
-  // order links were added.
+  // order links were added. kNeighbourLinksOnly stays on the traversals start lies on.
   using NodeFilter = std::function<bool(LocationId)>;
   std::vector<std::pair<LocationId, int>> withinLinks(LocationId start, int max_depth,
-                                                      const NodeFilter& allowed = nullptr) const;
+                                                      const NodeFilter& allowed = nullptr,
+                                                      LinkWalk walk = LinkWalk::kAnyLink) const;
 
  private:
+  bool isLoopClosure(LocationId a, LocationId b) const;
+
   std::map<LocationId, std::set<LocationId>> adjacency_;
+  std::set<std::pair<LocationId, LocationId>> loop_closures_;  // (smaller, larger) id
 };
 
 }  // namespace placedb
