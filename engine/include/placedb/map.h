@@ -85,7 +85,7 @@ using Tier = storage::Tier;
 struct QueryMatch {  // localisation: a stored location that resembles the query image
   std::int64_t location_id = 0;
   Tier tier = Tier::kWm;
-  double similarity = 0;  // eq. 5 against the location's signature; 0 for LTM (no words in RAM)
+  double similarity = 0;       // eq. 5 against its stored words (LTM: 0 until checked)
   double code_similarity = 0;  // cosine of the place codes, any tier
   int inliers = 0;             // the geometric check's epipolar inliers (0 when it did not run)
   bool verified = false;       // the geometric check passed (geometry_rule)
