@@ -66,10 +66,11 @@ def main():
     odd = list(range(1, len(frames), 2))
     answers = query(args.placedb, map_path, [str(lip6 / frames[i]) for i in odd])
     right = known = 0
-    times, searched = [], []
+    times, searched, checked = [], [], []
     for q, answer in zip(odd, answers):
         times.append(answer.get("time_ms", 0.0))
         searched.append(answer.get("searched", 0))
+        checked.append(answer.get("checked", 0))
         known += answer.get("verdict") == "known"
         if not answer.get("matches"):
             continue
@@ -91,7 +92,8 @@ def main():
     print(f"odd frames queried: {len(odd)}; top-1 right: {right} ({100.0 * right / len(odd):.1f} %); "
           f"verdict known: {known}")
     print(f"query time p50 {statistics.median(times):.1f} ms, max {max(times):.1f} ms; "
-          f"locations searched p50 {statistics.median(searched):.0f}")
+          f"locations searched p50 {statistics.median(searched):.0f}, checked p50 "
+          f"{statistics.median(checked):.0f}")
     print(f"rtabmap_samples images (never seen): {unknown} of {len(foreign)} answered unknown")
 
 
