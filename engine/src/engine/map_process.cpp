@@ -238,13 +238,14 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
     reason = toString(outcome.reason);
   }
   r.hypothesis.rejected_reason = reason;
-  w.hypothesis = storage::HypothesisRecord{
-      r.frame_id,
-      hypothesis != kNewPlace ? std::optional<std::int64_t>(hypothesis) : std::nullopt,
-      r.hypothesis.posterior,
-      r.hypothesis.score,
-      r.hypothesis.accepted,
-      reason};
+  storage::HypothesisRecord record;
+  record.frame_id = r.frame_id;
+  if (hypothesis != kNewPlace) record.best_location_id = hypothesis;
+  record.posterior = r.hypothesis.posterior;
+  record.loop_probability = r.hypothesis.score;
+  record.accepted = r.hypothesis.accepted;
+  record.rejected_reason = reason;
+  w.hypothesis = record;
   return hypothesis;
 }
 
