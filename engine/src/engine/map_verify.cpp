@@ -189,6 +189,7 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
     }
   }
   if (best) {
+    v.geometry = *best;
     v.passed = best->passed;
     v.inliers = best->inliers;
     v.matches = best->matches;
@@ -197,6 +198,7 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   if (!v.passed && best_near && passesNearLastClosure(*best_near)) {
     // Too weak for a place on its own, not for one that continues the last closure.
     v.location = near_location;
+    v.geometry = *best_near;
     v.inliers = best_near->inliers;
     v.matches = best_near->matches;
     v.log10_nfa = std::min(best_near->log10_nfa, kNoModel);
