@@ -1,4 +1,4 @@
--- placedb map schema: the current version (6), as one file.
+-- placedb map schema: the current version (7), as one file.
 -- It must equal the result of applying migrations/0001..N in order; a test compares
 -- sqlite_master of both. `sqlite3 new.db < schema/schema.sql` makes an empty placedb map.
 -- See schema/SCHEMA.md for the meaning of every table, column and view.
@@ -128,7 +128,18 @@ CREATE TABLE hypotheses (
   posterior REAL NOT NULL,
   loop_probability REAL NOT NULL,
   accepted INTEGER NOT NULL CHECK (accepted IN (0, 1)),
-  rejected_reason TEXT
+  rejected_reason TEXT,
+  -- Schema 7: an accepted closure's relative pose where the session has intrinsics, else NULL:
+  -- the frame's camera in the camera of best_location_id, rotation as a unit quaternion and
+  -- unit translation direction (no scale), and the pairs that agreed with the essential matrix.
+  pose_qw REAL,
+  pose_qx REAL,
+  pose_qy REAL,
+  pose_qz REAL,
+  pose_tx REAL,
+  pose_ty REAL,
+  pose_tz REAL,
+  pose_inliers INTEGER
 );
 CREATE INDEX hypotheses_by_location ON hypotheses (best_location_id);
 
@@ -212,6 +223,13 @@ SELECT tree, count(*) AS internal_nodes, count(*) + 1 AS leaves,
        count(DISTINCT split_dim) AS split_dimensions
 FROM kd_nodes GROUP BY tree;
 
+-- Accepted loop closures that carry a relative pose (schema 7).
+CREATE VIEW v_loop_closure_poses AS
+SELECT h.frame_id, f.session_id, f.source_index, f.location_id, h.best_location_id,
+       h.pose_qw, h.pose_qx, h.pose_qy, h.pose_qz, h.pose_tx, h.pose_ty, h.pose_tz, h.pose_inliers
+FROM hypotheses h JOIN frames f ON f.id = h.frame_id
+WHERE h.accepted = 1 AND h.pose_qw IS NOT NULL;
+
 -- Place codes: a compact global descriptor of every location, in every tier (signed bytes).
 CREATE TABLE place_codes (
   location_id INTEGER PRIMARY KEY REFERENCES locations (id) ON DELETE CASCADE,
@@ -227,5 +245,5 @@ CREATE TABLE wm_entries (
 
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 6;
+PRAGMA user_version = 7;
 COMMIT;

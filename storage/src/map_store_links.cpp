@@ -63,25 +63,73 @@ void MapStore::insertHypothesis(const HypothesisRecord& h) {
   WriteScope scope(*this);
   auto s = db_->cached(
       "INSERT INTO hypotheses (frame_id, best_location_id, posterior, loop_probability, "
-      "accepted, rejected_reason) VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+      "accepted, rejected_reason, pose_qw, pose_qx, pose_qy, pose_qz, pose_tx, pose_ty, pose_tz, "
+      "pose_inliers) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)");
   s->bind(1, h.frame_id);
   s->bind(2, h.best_location_id);
   s->bind(3, h.posterior);
   s->bind(4, h.loop_probability);
   s->bind(5, std::int64_t{h.accepted ? 1 : 0});
   if (!h.rejected_reason.empty()) s->bind(6, h.rejected_reason);
+  if (h.pose) {
+    const ClosurePose& p = *h.pose;
+    int column = 7;
+    for (double v : {p.qw, p.qx, p.qy, p.qz, p.tx, p.ty, p.tz}) s->bind(column++, v);
+    s->bind(column, p.inliers);
+  }
   s->run();
   scope.commit();
 }
 
+namespace {
+
+// Columns first..first+7 of a row: the pose_* columns in table order; none when NULL.
+std::optional<ClosurePose> poseColumns(const detail::Statement& s, int first) {
+  if (!s.columnOptionalDouble(first)) return std::nullopt;
+  ClosurePose p;
+  double* values[] = {&p.qw, &p.qx, &p.qy, &p.qz, &p.tx, &p.ty, &p.tz};
+  for (int i = 0; i < 7; ++i) *values[i] = s.columnDouble(first + i);
+  p.inliers = s.columnInt(first + 7);
+  return p;
+}
+
+}  // namespace
+
 std::optional<HypothesisRecord> MapStore::hypothesis(std::int64_t frame_id) const {
   auto s = db_->cached(
       "SELECT frame_id, best_location_id, posterior, loop_probability, accepted, "
-      "rejected_reason FROM hypotheses WHERE frame_id = ?1");
+      "rejected_reason, pose_qw, pose_qx, pose_qy, pose_qz, pose_tx, pose_ty, pose_tz, "
+      "pose_inliers FROM hypotheses WHERE frame_id = ?1");
   s->bind(1, frame_id);
   if (!s->step()) return std::nullopt;
-  return HypothesisRecord{s->columnInt(0),    s->columnOptionalInt(1), s->columnDouble(2),
-                          s->columnDouble(3), s->columnInt(4) != 0,    s->columnText(5)};
+  HypothesisRecord h;
+  h.frame_id = s->columnInt(0);
+  h.best_location_id = s->columnOptionalInt(1);
+  h.posterior = s->columnDouble(2);
+  h.loop_probability = s->columnDouble(3);
+  h.accepted = s->columnInt(4) != 0;
+  h.rejected_reason = s->columnText(5);
+  h.pose = poseColumns(*s, 6);
+  return h;
+}
+
+std::vector<ClosurePoseRecord> MapStore::closurePoses() const {
+  auto s = db_->cached(
+      "SELECT h.frame_id, f.location_id, h.best_location_id, h.pose_qw, h.pose_qx, h.pose_qy, "
+      "h.pose_qz, h.pose_tx, h.pose_ty, h.pose_tz, h.pose_inliers "
+      "FROM hypotheses h JOIN frames f ON f.id = h.frame_id "
+      "WHERE h.accepted = 1 AND h.pose_qw IS NOT NULL AND f.location_id IS NOT NULL "
+      "AND h.best_location_id IS NOT NULL ORDER BY h.frame_id");
+  std::vector<ClosurePoseRecord> out;
+  while (s->step()) {
+    ClosurePoseRecord r;
+    r.frame_id = s->columnInt(0);
+    r.frame_location_id = s->columnInt(1);
+    r.hypothesis_location_id = s->columnInt(2);
+    r.pose = *poseColumns(*s, 3);
+    out.push_back(r);
+  }
+  return out;
 }
 
 }  // namespace placedb::storage

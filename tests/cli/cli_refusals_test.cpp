@@ -111,13 +111,23 @@ TEST(CliRefusals, RefusedRunsCreateAndChangeNothing) {
   auto dir = scratchDir("CliRefusals_nothing");
   auto source = (seq / "frames.txt").string();
   auto fresh = (dir / "fresh.placedb").string();
-  // Settings the catalogue accepts but a component refuses, or the catalogue itself refuses.
-  for (const std::string setting : {"hessian_threshold=1e308", "wm_recent_ratio=1"}) {
+  // Settings the catalogue accepts but a component refuses, or the catalogue itself refuses;
+  // camera intrinsics are all four or none.
+  for (const std::string setting : {"hessian_threshold=1e308", "wm_recent_ratio=1", "fx=190"}) {
     expectCleanError(placedb({"map", fresh, source, "--set", setting}, dir), 2,
                      setting.substr(0, setting.find('=')));
     EXPECT_FALSE(fs::exists(fresh)) << setting;
     EXPECT_FALSE(fs::exists(fresh + "-lock")) << setting;
   }
+  // A calibration file that is not one, or missing: named, and nothing made.
+  std::ofstream(dir / "camera.txt") << "190 190 120\n";
+  expectCleanError(
+      placedb({"map", fresh, source, "--calibration", (dir / "camera.txt").string()}, dir), 2,
+      "camera.txt");
+  expectCleanError(
+      placedb({"map", fresh, source, "--calibration", (dir / "absent.yml").string()}, dir), 3,
+      "absent.yml");
+  EXPECT_FALSE(fs::exists(fresh));
 
   auto map = (dir / "m.placedb").string();
   ASSERT_EQ(placedb({"map", map, source, "-q"}, dir).exit_code, 0);

@@ -184,6 +184,10 @@ void downgradeToSchemaTwo(const std::string& path) {
   exec("DROP TABLE wm_entries");
   exec("DELETE FROM engine_state WHERE key = 'place_codes.centres'");
   exec("ALTER TABLE sessions DROP COLUMN source_digest");  // schema 6
+  exec("DROP VIEW v_loop_closure_poses");                  // schema 7
+  for (const char* column : {"pose_qw", "pose_qx", "pose_qy", "pose_qz", "pose_tx", "pose_ty",
+                             "pose_tz", "pose_inliers"})
+    exec(std::string("ALTER TABLE hypotheses DROP COLUMN ") + column);
   exec("PRAGMA user_version = 2");
   exec("COMMIT");
   sqlite3_close(db);

@@ -270,3 +270,65 @@ TEST(Refusal, ReadOnlyOpenOfMissingFileIsIoError) {
 
 }  // namespace
 }  // namespace placedb::storage
+
+namespace placedb::storage {
+namespace {
+
+// Schema 7: a version-6 map's hypotheses keep their rows and gain pose columns, all NULL; new
+// rows carry a pose or NULL, and only accepted rows with a pose are closure poses.
+TEST(Migrations, SixToSevenAddsNullPoseColumns) {
+  const auto dir = placedb::testing::scratchDir("SixToSeven");
+  const std::string path = (dir / "v6.db").string();
+  buildMapAtVersion(path, 6);
+  {
+    RawDb db(path);
+    db.exec(
+        "INSERT INTO sessions (id, started_at, software_version, source) "
+        "VALUES (1, '2026-01-01T00:00:00Z', 'old', 'src')");
+    db.exec("INSERT INTO frames (id, session_id, source_index, outcome) VALUES (1, 1, 0, 0)");
+    db.exec(
+        "INSERT INTO hypotheses (frame_id, posterior, loop_probability, accepted) "
+        "VALUES (1, 0.5, 0.9, 1)");
+  }
+  {
+    MapStore store(path, OpenMode::kReadWrite);
+    ASSERT_EQ(store.schemaVersion(), 7);
+    auto old = store.hypothesis(1);
+    ASSERT_TRUE(old);
+    EXPECT_TRUE(old->accepted);
+    EXPECT_FALSE(old->pose);
+    EXPECT_TRUE(store.closurePoses().empty());
+
+    testing::writeFrame(store, 1, 1);  // frame 2 at location 2
+    testing::writeFrame(store, 1, 2);  // frame 3 at location 3
+    HypothesisRecord with_pose;
+    with_pose.frame_id = 3;
+    with_pose.best_location_id = 2;
+    with_pose.posterior = 0.4;
+    with_pose.loop_probability = 0.95;
+    with_pose.accepted = true;
+    with_pose.pose = ClosurePose{0.9, 0.1, -0.3, 0.2, 0.6, 0.0, 0.8, 21};
+    auto tx = store.begin();
+    store.insertHypothesis(with_pose);
+    tx.commit();
+    const auto back = store.hypothesis(3);
+    ASSERT_TRUE(back && back->pose);
+    EXPECT_EQ(back->pose->qy, -0.3);
+    EXPECT_EQ(back->pose->tz, 0.8);
+    EXPECT_EQ(back->pose->inliers, 21);
+    const auto poses = store.closurePoses();
+    ASSERT_EQ(poses.size(), 1u);
+    EXPECT_EQ(poses[0].frame_id, 3);
+    EXPECT_EQ(poses[0].frame_location_id, 3);
+    EXPECT_EQ(poses[0].hypothesis_location_id, 2);
+  }
+  RawDb db(path);
+  EXPECT_EQ(db.rows("SELECT count(*) FROM hypotheses WHERE pose_qw IS NULL AND pose_tx IS NULL "
+                    "AND pose_inliers IS NULL"),
+            std::vector<std::string>{"1"});
+  EXPECT_EQ(db.rows("SELECT frame_id, best_location_id, pose_inliers FROM v_loop_closure_poses"),
+            std::vector<std::string>{"3|2|21"});
+}
+
+}  // namespace
+}  // namespace placedb::storage

@@ -20,6 +20,10 @@ void addSettingsOptions(CLI::App& app, SettingsInput& settings) {
                  "settings file: `key = value` lines ('#' comments) or one JSON object");
   app.add_option("--preset", settings.preset,
                  "start from a preset: `paper` (paper 000, table 4) or `default`");
+  app.add_option("--calibration", settings.calibration_file,
+                 "camera intrinsics (settings fx fy cx cy): a line `fx fy cx cy` or an OpenCV "
+                 "YAML/XML/JSON file with camera_matrix; accepted loop closures then store their "
+                 "relative pose");
 }
 
 Command addMapCommand(CLI::App& parent) {
@@ -37,7 +41,8 @@ Command addMapCommand(CLI::App& parent) {
       "the start of SOURCE. Unreadable images are recorded as bad frames with a warning.\n"
       "A session whose SOURCE lists other images than when it began is not resumed (exit 2;\n"
       "--new-session maps it anew).\n\n"
-      "Settings: defaults < --preset < --config < --set. A resumed session keeps its settings.\n\n"
+      "Settings: defaults < --preset < --config < --calibration < --set. A resumed session\n"
+      "keeps its settings (camera intrinsics included).\n\n"
       "The --log CSV has one row per frame processed by this invocation; an existing log is\n"
       "appended to only by a resume of the session that wrote it (another run is exit 2):\n"
       "frame,candidate_frames,score,accepted,time_ms, then outcome, location,\n"

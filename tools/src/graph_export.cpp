@@ -26,10 +26,46 @@ const char* linkTypeName(storage::LinkType type) {
   return "?";
 }
 
-// The one place that reads a closure's relative pose: the map stores none yet (the geometric
-// check keeps only its inlier count), so every closure is appearance-only.
-std::optional<RelativePose> storedPose(const storage::MapStore&, const storage::LinkRecord&) {
-  return std::nullopt;
+using PoseOfPair = std::map<std::pair<std::int64_t, std::int64_t>, storage::ClosurePoseRecord>;
+
+// The closure poses the map stores, one per location pair (a < b): the frame whose essential
+// matrix had the most inliers, the latest on a tie. A pair closed again and again gets many.
+PoseOfPair storedPoses(const storage::MapStore& store) {
+  PoseOfPair best;
+  for (const auto& record : store.closurePoses()) {
+    const auto key = std::minmax(record.frame_location_id, record.hypothesis_location_id);
+    auto [it, inserted] = best.emplace(key, record);
+    if (!inserted && record.pose.inliers >= it->second.pose.inliers) it->second = record;
+  }
+  return best;
+}
+
+// The one place that reads a closure's relative pose. The map stores the frame's camera in the
+// hypothesis location's (hypotheses.pose_*); an edge a -> b wants b's in a's, so a pose stored
+// from the other side is inverted: (R, t) -> (R', -R' t).
+std::optional<RelativePose> storedPose(const PoseOfPair& poses, const storage::LinkRecord& link) {
+  if (link.type != storage::LinkType::kLoopClosure) return std::nullopt;
+  const auto found = poses.find({link.location_a, link.location_b});
+  if (found == poses.end()) return std::nullopt;
+  const storage::ClosurePose& p = found->second.pose;
+  RelativePose pose;
+  pose.inliers = p.inliers;
+  if (found->second.frame_location_id == link.location_b) {
+    pose.rotation_xyzw = {p.qx, p.qy, p.qz, p.qw};
+    pose.translation_direction = {p.tx, p.ty, p.tz};
+    return pose;
+  }
+  // The conjugate quaternion is R'; rotate t by it and negate.
+  const double w = p.qw, x = -p.qx, y = -p.qy, z = -p.qz;
+  const double r[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)},
+                          {2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)},
+                          {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)}};
+  const double t[3] = {p.tx, p.ty, p.tz};
+  for (int i = 0; i < 3; ++i)
+    pose.translation_direction[static_cast<std::size_t>(i)] =
+        -(r[i][0] * t[0] + r[i][1] * t[1] + r[i][2] * t[2]);
+  pose.rotation_xyzw = {x, y, z, w};
+  return pose;
 }
 
 std::string framesText(const GraphLocation& location) {
@@ -69,13 +105,14 @@ void writeCsv(const MapGraph& graph, const std::filesystem::path& folder) {
 
   const auto links_path = folder / "links.csv";
   auto links = openOutput(links_path);
-  links << "location_a,location_b,type,score,appearance_only,qx,qy,qz,qw,tx,ty,tz\n";
+  links << "location_a,location_b,type,score,appearance_only,qx,qy,qz,qw,tx,ty,tz,pose_inliers\n";
   for (const auto& k : graph.links) {
-    std::string pose = ",,,,,,";
+    std::string pose = ",,,,,,,";
     if (k.pose) {
       const auto& q = k.pose->rotation_xyzw;
       const auto& t = k.pose->translation_direction;
-      pose = fmt::format("{},{},{},{},{},{},{}", q[0], q[1], q[2], q[3], t[0], t[1], t[2]);
+      pose = fmt::format("{},{},{},{},{},{},{},{}", q[0], q[1], q[2], q[3], t[0], t[1], t[2],
+                         k.pose->inliers);
     }
     const bool closure = k.type == "loop_closure";
     links << fmt::format("{},{},{},{},{},{}\n", k.location_a, k.location_b, k.type, scoreText(k),
@@ -95,7 +132,12 @@ void writeGraphml(const MapGraph& graph, const std::filesystem::path& path) {
          "  <key id=\"type\" for=\"edge\" attr.name=\"type\" attr.type=\"string\"/>\n"
          "  <key id=\"score\" for=\"edge\" attr.name=\"score\" attr.type=\"double\"/>\n"
          "  <key id=\"appearance_only\" for=\"edge\" attr.name=\"appearance_only\" "
-         "attr.type=\"boolean\"/>\n"
+         "attr.type=\"boolean\"/>\n";
+  for (const char* key : {"qx", "qy", "qz", "qw", "tx", "ty", "tz"})
+    out << fmt::format("  <key id=\"{0}\" for=\"edge\" attr.name=\"{0}\" attr.type=\"double\"/>\n",
+                       key);
+  out << "  <key id=\"pose_inliers\" for=\"edge\" attr.name=\"pose_inliers\" "
+         "attr.type=\"long\"/>\n"
          "  <graph id=\"placedb\" edgedefault=\"undirected\">\n";
   for (const auto& l : graph.locations)
     out << fmt::format(
@@ -107,6 +149,15 @@ void writeGraphml(const MapGraph& graph, const std::filesystem::path& path) {
     if (k.score) data += fmt::format("<data key=\"score\">{}</data>", *k.score);
     if (k.type == "loop_closure")
       data += fmt::format("<data key=\"appearance_only\">{}</data>", k.pose ? "false" : "true");
+    if (k.pose) {
+      const auto& q = k.pose->rotation_xyzw;
+      const auto& t = k.pose->translation_direction;
+      const double values[] = {q[0], q[1], q[2], q[3], t[0], t[1], t[2]};
+      const char* keys[] = {"qx", "qy", "qz", "qw", "tx", "ty", "tz"};
+      for (int i = 0; i < 7; ++i)
+        data += fmt::format("<data key=\"{}\">{}</data>", keys[i], values[i]);
+      data += fmt::format("<data key=\"pose_inliers\">{}</data>", k.pose->inliers);
+    }
     out << fmt::format("    <edge source=\"n{}\" target=\"n{}\">{}</edge>\n", k.location_a,
                        k.location_b, data);
   }
@@ -117,11 +168,14 @@ void writeGraphml(const MapGraph& graph, const std::filesystem::path& path) {
 void writeG2o(const MapGraph& graph, const std::filesystem::path& path) {
   auto out = openOutput(path);
   out << "# placedb map graph: locations at the origin (no poses are stored); links in\n"
-         "# odometry order, then loop closures. Replace the odometry edges with measured ones.\n";
+         "# odometry order, then loop closures. Replace the odometry edges with measured ones.\n"
+         "# A closure with a pose: unit translation direction, zero translation information.\n";
   for (const auto& l : graph.locations)
     out << fmt::format("VERTEX_SE3:QUAT {} 0 0 0 0 0 0 1\n", l.id);
-  // Unit information, upper triangle of the 6 x 6 matrix row by row.
+  // Upper triangle of the 6 x 6 information matrix row by row (x y z, then rotation): unit,
+  // or for a measured closure zero on the translation, whose scale one camera cannot measure.
   const std::string information = "1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1";
+  const std::string rotation_only = "0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 1 0 0 1 0 1";
   for (const char* type : {"odometry", "loop_closure"}) {
     for (const auto& k : graph.links) {
       if (k.type != type) continue;
@@ -129,10 +183,14 @@ void writeG2o(const MapGraph& graph, const std::filesystem::path& path) {
       if (k.type == "loop_closure" && !k.pose)
         out << fmt::format("# placedb appearance-only {} {} score {}\n", k.location_a, k.location_b,
                            scoreText(k));
+      if (k.pose)
+        out << fmt::format("# placedb pose {} {} inliers {} score {}\n", k.location_a, k.location_b,
+                           k.pose->inliers, scoreText(k));
       const auto& t = pose.translation_direction;
       const auto& q = pose.rotation_xyzw;
       out << fmt::format("EDGE_SE3:QUAT {} {} {} {} {} {} {} {} {} {}\n", k.location_a,
-                         k.location_b, t[0], t[1], t[2], q[0], q[1], q[2], q[3], information);
+                         k.location_b, t[0], t[1], t[2], q[0], q[1], q[2], q[3],
+                         k.pose ? rotation_only : information);
     }
   }
   finish(out, path);
@@ -149,6 +207,7 @@ MapGraph readMapGraph(const std::string& map_path) {
   for (const auto& s : store.sessions())
     for (const auto& f : store.frames(s.id)) frame_of[f.id] = {f.session_id, f.source_index};
 
+  const PoseOfPair poses = storedPoses(store);
   MapGraph graph;
   for (auto tier : {storage::Tier::kStm, storage::Tier::kWm, storage::Tier::kLtm})
     for (const auto& l : store.locationsInTier(tier)) {
@@ -177,7 +236,7 @@ MapGraph readMapGraph(const std::string& map_path) {
     for (const auto& link : store.links(l.id)) {
       if (link.location_a != l.id) continue;  // each stored link once
       graph.links.push_back({link.location_a, link.location_b, linkTypeName(link.type), link.score,
-                             storedPose(store, link)});
+                             storedPose(poses, link)});
     }
   std::sort(graph.links.begin(), graph.links.end(), [](const GraphLink& a, const GraphLink& b) {
     return std::tie(a.location_a, a.location_b, a.type) <

@@ -7,7 +7,12 @@
 //   graphml  one GraphML file (Gephi, yEd, networkx)
 //   g2o      one g2o file: VERTEX_SE3:QUAT per location at the origin (placedb keeps no poses)
 //            and EDGE_SE3:QUAT per link; a link without a measured pose is the identity with a
-//            unit information matrix, announced by a `# placedb appearance-only A B` comment
+//            unit information matrix, announced by a `# placedb appearance-only A B` comment.
+//            A closure with a measured pose (a map made with intrinsics fx fy cx cy) carries
+//            its rotation and unit translation direction, with unit information on the rotation
+//            and zero on the translation (one camera measures no scale: the optimiser is told
+//            nothing about the distance, the direction is in the measurement for tools that
+//            read it), announced by `# placedb pose A B inliers N`
 #include <array>
 #include <cstdint>
 #include <filesystem>
@@ -30,11 +35,13 @@ struct GraphLocation {
   std::vector<GraphFrame> frames;  // by frame id
 };
 
-// Where the geometric check measured it: the rotation from b to a and the direction (unit
-// length; a monocular check knows no scale) of a's translation seen from b.
+// Where the geometric check measured it: the pose of b's camera in a's (g2o's measurement of
+// an edge a -> b): a point X in b's camera coordinates is R X + s t in a's, R the rotation and
+// t the translation direction (unit length; a monocular check knows no scale).
 struct RelativePose {
   std::array<double, 4> rotation_xyzw{0, 0, 0, 1};
   std::array<double, 3> translation_direction{0, 0, 0};
+  std::int64_t inliers = 0;  // pairs that agreed with the essential matrix
 };
 
 struct GraphLink {

@@ -5,6 +5,7 @@
 #include <cctype>
 #include <nlohmann/json.hpp>
 
+#include "calibration_file.h"
 #include "placedb/error.h"
 #include "text_file.h"
 
@@ -97,6 +98,9 @@ Options resolveOptions(const SettingsInput& input) {
   Options base = presetOptions(input.preset);
   Settings merged;
   if (!input.config_file.empty()) merged = readConfigFile(input.config_file);
+  if (!input.calibration_file.empty())
+    for (const auto& [key, value] : readCalibrationFile(input.calibration_file))
+      merged[key] = value;
   for (const auto& [key, value] : parseAssignments(input.assignments)) merged[key] = value;
   return Options::fromSettings(merged, base);
 }

@@ -1,7 +1,7 @@
 #pragma once
 // Engine settings from the command line: `--preset paper`, `--config FILE`, `--set key=value`.
-// Precedence: defaults (or the preset) < config file < --set. Options::fromSettings refuses
-// unknown keys and bad values with the list of valid ones.
+// Precedence: defaults (or the preset) < config file < --calibration < --set. Options::fromSettings
+// refuses unknown keys and bad values with the list of valid ones.
 //
 // Config file: either lines `key = value` (blank lines and '#' comments ignored; a '#' after a
 // value starts a comment too), or one JSON object {"key": value, ...} when the first
@@ -21,7 +21,10 @@ struct SettingsInput {
   std::string preset;                    // "" or "paper"
   std::string config_file;               // "" when none
   std::vector<std::string> assignments;  // "key=value", later ones win
-  bool empty() const { return preset.empty() && config_file.empty() && assignments.empty(); }
+  std::string calibration_file;          // "" when none; fx fy cx cy (calibration_file.h)
+  bool empty() const {
+    return preset.empty() && config_file.empty() && assignments.empty() && calibration_file.empty();
+  }
 };
 
 // Throws placedb::Error(kInvalidArgument) for an assignment without '=' or an empty key.

@@ -50,6 +50,9 @@ struct Hypothesis {
   int matches = 0;              // ... among this many correspondences
   double log10_nfa = 0;         // the check's false alarms, log10 (0: no check; 99: no model)
   int candidates_checked = 0;   // locations the geometric check ran on this frame
+  // An accepted closure's relative pose (this frame's camera in the location's) when the
+  // session and the location's session have camera intrinsics (Options::fx ...); none otherwise.
+  std::optional<storage::ClosurePose> pose;
 };
 
 struct FrameResult {

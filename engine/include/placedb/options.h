@@ -107,6 +107,17 @@ struct Options {
   int temporal_radius = 2;              // links from the last accepted closure
   int temporal_max_gap = 1;             // frames since the last accepted closure (1 = previous)
 
+  // --- camera intrinsics (optional) ---
+  // The pinhole camera of the images as they are mapped, in pixels: all four or none (0 =
+  // unknown). With them each accepted loop closure also stores its relative pose, from an
+  // essential matrix fitted to the geometric check's pairs (schema 7); which closures are
+  // accepted does not change. A session keeps the ones it began with.
+  double fx = 0;  // focal lengths
+  double fy = 0;
+  double cx = 0;  // principal point
+  double cy = 0;
+  bool hasIntrinsics() const { return fx > 0 && fy > 0; }
+
   // Throws placedb::Error(kInvalidArgument) naming the key and the valid values or range;
   // an unknown key is refused with the list of known ones.
   static Options fromSettings(const std::map<std::string, std::string>& settings,

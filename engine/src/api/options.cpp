@@ -236,6 +236,12 @@ const std::vector<Row>& table() {
       integer("temporal_max_gap", &Options::temporal_max_gap, 1, 100000, "1..100000",
               "frames since the last accepted loop closure for the relaxed rule to apply "
               "(1 = the previous frame's)"),
+      real("fx", &Options::fx, 0, 1e6, "0..1e6",
+           "camera focal length along x in pixels; fx fy cx cy all four or none (0 = unknown): "
+           "with them every accepted loop closure also stores its relative pose"),
+      real("fy", &Options::fy, 0, 1e6, "0..1e6", "camera focal length along y in pixels"),
+      real("cx", &Options::cx, 0, 1e6, "0..1e6", "camera principal point x in pixels"),
+      real("cy", &Options::cy, 0, 1e6, "0..1e6", "camera principal point y in pixels"),
   };
   return rows;
 }
@@ -303,6 +309,12 @@ std::map<std::string, std::string> Options::toSettings() const {
 void Options::validate() const {
   for (const auto& r : table())
     if (!r.ok(*this)) refuse(r.key, r.get(*this), r.valid);
+  const int intrinsics = (fx != 0) + (fy != 0) + (cx != 0) + (cy != 0);
+  if (intrinsics != 0 && intrinsics != 4)
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("camera intrinsics need all four of fx fy cx cy or none (0 = unknown); "
+                            "got fx={} fy={} cx={} cy={}",
+                            fx, fy, cx, cy));
   if (t_nd1 > t_nd2)
     throw Error(ErrorCode::kInvalidArgument,
                 fmt::format("t_nd1 ({}) must not exceed t_nd2 ({})", t_nd1, t_nd2));

@@ -217,8 +217,11 @@ EpipolarFit fitEpipolar(const std::vector<cv::Point2f>& a, const std::vector<cv:
   fit.passed = fit.log10_nfa <= pass_at;
   if (fit.inliers == 0) return fit;
   fit.fundamental = cv::Matx33d(best_f.data());
-  for (int i = 0; i < n; ++i)
-    if (distance(best_f, a[i], b[i]) <= fit.threshold_px) fit.inlier_pairs.push_back(i);
+  for (int i = 0; i < n; ++i) {
+    const double d = distance(best_f, a[i], b[i]);
+    if (d <= fit.threshold_px) fit.inlier_pairs.push_back(i);
+    if (d <= settings.max_error_px) fit.agreeing_pairs.push_back(i);
+  }
   return fit;
 }
 

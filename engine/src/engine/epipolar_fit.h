@@ -32,12 +32,13 @@ struct EpipolarFitSettings {
 };
 
 struct EpipolarFit {
-  int inliers = 0;                // pairs within the best model's adaptive distance (7 minimum)
-  double log10_nfa = 1e9;         // of the best model; log10(max_nfa) or less passes
-  double threshold_px = 0;        // that adaptive distance
-  cv::Matx33d fundamental;        // query point a, candidate point b: b' F a = 0
-  std::vector<int> inlier_pairs;  // indices into the correspondences, ascending
-  int most_within_max_error = 0;  // the most pairs any model put within max_error_px
+  int inliers = 0;                  // pairs within the best model's adaptive distance (7 minimum)
+  double log10_nfa = 1e9;           // of the best model; log10(max_nfa) or less passes
+  double threshold_px = 0;          // that adaptive distance
+  cv::Matx33d fundamental;          // query point a, candidate point b: b' F a = 0
+  std::vector<int> inlier_pairs;    // indices into the correspondences, ascending
+  std::vector<int> agreeing_pairs;  // ... within max_error_px of that model, ascending
+  int most_within_max_error = 0;    // the most pairs any model put within max_error_px
   bool passed = false;
 };
 

@@ -186,6 +186,10 @@ GeometricResult fit(const Pairs& pairs, cv::Size2f extent, int keypoints,
   const bool by_chance =
       chance && f.passed && f.inliers >= minimumInliers(s.min_overlap, keypoints);
   r.passed = by_count || by_chance;
+  for (int i : f.agreeing_pairs) {
+    r.agreeing_query.push_back(pairs.a[static_cast<std::size_t>(i)]);
+    r.agreeing_candidate.push_back(pairs.b[static_cast<std::size_t>(i)]);
+  }
   if (!r.passed) {
     // Pairs that did not move (the same view again, as from a camera standing still) are a
     // degenerate case for a fundamental matrix: every skew-symmetric F fits them, so the 7-point
@@ -204,6 +208,14 @@ GeometricResult fit(const Pairs& pairs, cv::Size2f extent, int keypoints,
       r.inliers = still;
       r.log10_nfa = std::min(r.log10_nfa, log10_nfa);
       r.passed = true;
+      r.still = true;
+      r.agreeing_query.clear();
+      r.agreeing_candidate.clear();
+      for (std::size_t i = 0; i < pairs.a.size(); ++i)
+        if (cv::norm(pairs.a[i] - pairs.b[i]) <= s.max_error_px) {
+          r.agreeing_query.push_back(pairs.a[i]);
+          r.agreeing_candidate.push_back(pairs.b[i]);
+        }
     }
   }
   return r;

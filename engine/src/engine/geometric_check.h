@@ -63,6 +63,10 @@ struct GeometricResult {
   int keypoints = 0;        // of the view with fewer keypoints (the overlap's base)
   bool passed = false;      // log10_nfa <= log10(max_nfa) and enough inliers
   bool from_words = false;  // the word pairs alone passed; no descriptor was compared
+  // The pairs that agree with the best model (within max_error_px of its epipolar lines), or
+  // with the identity when `still`: what a relative pose is measured from (relative_pose.h).
+  std::vector<cv::Point2f> agreeing_query, agreeing_candidate;
+  bool still = false;  // passed as pairs that did not move (a camera standing still)
 };
 
 struct GeometricView {  // keypoints and one descriptor row per keypoint (CV_32F)

@@ -2,6 +2,7 @@
 // The engine behind placedb::Map: the per-frame pipeline over the storage, vocabulary, memory
 // tiers and Bayes filter. One MapImpl owns one open map file.
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -10,6 +11,7 @@
 #include "engine/engine_state.h"
 #include "engine/geometric_check.h"
 #include "engine/keypoint_cache.h"
+#include "engine/relative_pose.h"
 #include "engine/state_keys.h"
 #include "features/feature_extractor.h"
 #include "filter/bayes_filter.h"
@@ -85,6 +87,10 @@ class MapImpl final : public Map {
                                  FrameResult& result, FrameWrite& write, StageTimes& times);
   void acceptLoopClosure(std::int64_t hypothesis, bool temporal, FrameResult& result,
                          FrameWrite& write);
+  // An accepted closure's relative pose when this session and the hypothesis' have intrinsics.
+  std::optional<storage::ClosurePose> closurePose(std::int64_t hypothesis,
+                                                  const GeometricResult& geometry);
+  CameraIntrinsics sessionIntrinsics(std::int64_t session_id);  // cached per session
   // Retrieval around the hypothesis, then transfer; memory_ms is this frame's time in the
   // stages that grow with memory, which the time budget (t_time_ms) bounds.
   void manageMemory(std::int64_t hypothesis, double memory_ms, FrameWrite& write,
@@ -97,10 +103,11 @@ class MapImpl final : public Map {
     std::int64_t location = 0;  // kNewPlace (-1) when there is none
     bool passed = false;        // the geometric check (or no check) let it through
     int inliers = 0;
-    int matches = 0;        // descriptor matches behind the inliers
-    bool temporal = false;  // passed on temporal_max_nfa, near the last accepted closure
-    int checked = 0;        // candidates the check ran on
-    double log10_nfa = 0;   // the reported candidate's number of false alarms, log10
+    int matches = 0;           // descriptor matches behind the inliers
+    bool temporal = false;     // passed on temporal_max_nfa, near the last accepted closure
+    int checked = 0;           // candidates the check ran on
+    double log10_nfa = 0;      // the reported candidate's number of false alarms, log10
+    GeometricResult geometry;  // the reported candidate's check (its agreeing pairs)
   };
   Verified verifyHypothesis(const FilterOutcome& outcome, const Features& features,
                             const std::vector<std::int64_t>& word_of_feature,
@@ -143,6 +150,7 @@ class MapImpl final : public Map {
   VocabularyStateWriter vocabulary_state_;
   std::vector<std::int64_t> imported_words_;  // ascending; never leave the index
   std::optional<std::int64_t> session_id_;
+  std::map<std::int64_t, CameraIntrinsics> session_intrinsics_;  // other sessions', as read
   bool closed_ = false;
   bool broken_ = false;  // a failed commit left RAM ahead of the file: reopen to continue
 };

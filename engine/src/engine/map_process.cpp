@@ -213,6 +213,11 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
   const auto verify_start = Clock::now();
   const Verified verified =
       verifyHypothesis(outcome, features, q.word_of_feature, similarities, r.frame_id);
+  // Measuring the pose is part of verification; it never changes the decision.
+  std::optional<storage::ClosurePose> pose;
+  if (options_.hasIntrinsics() && verified.location != kNewPlace && outcome.accepted &&
+      verified.passed)
+    pose = closurePose(verified.location, verified.geometry);
   times.verification = msSince(verify_start);
   r.hypothesis.candidates_checked = verified.checked;
   const std::int64_t hypothesis = verified.location;
@@ -227,7 +232,10 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
     // EVALUATION.md: the score is 0 where a check other than the final threshold rejected it.
     const bool vetoed = !verified.passed || outcome.reason == RejectReason::kRatioTest;
     r.hypothesis.score = vetoed ? 0.0 : outcome.score;
-    if (r.hypothesis.accepted) acceptLoopClosure(hypothesis, verified.temporal, r, w);
+    if (r.hypothesis.accepted) {
+      r.hypothesis.pose = pose;
+      acceptLoopClosure(hypothesis, verified.temporal, r, w);
+    }
     if (!r.hypothesis.accepted) {
       reason = verified.passed
                    ? std::string(toString(outcome.reason))
@@ -238,13 +246,15 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
     reason = toString(outcome.reason);
   }
   r.hypothesis.rejected_reason = reason;
-  w.hypothesis = storage::HypothesisRecord{
-      r.frame_id,
-      hypothesis != kNewPlace ? std::optional<std::int64_t>(hypothesis) : std::nullopt,
-      r.hypothesis.posterior,
-      r.hypothesis.score,
-      r.hypothesis.accepted,
-      reason};
+  storage::HypothesisRecord record;
+  record.frame_id = r.frame_id;
+  if (hypothesis != kNewPlace) record.best_location_id = hypothesis;
+  record.posterior = r.hypothesis.posterior;
+  record.loop_probability = r.hypothesis.score;
+  record.accepted = r.hypothesis.accepted;
+  record.rejected_reason = reason;
+  record.pose = r.hypothesis.pose;
+  w.hypothesis = record;
   return hypothesis;
 }
 
@@ -262,6 +272,40 @@ void MapImpl::acceptLoopClosure(std::int64_t hypothesis, bool temporal, FrameRes
         link(r.location_id, hypothesis, storage::LinkType::kLoopClosure, r.hypothesis.score));
     graph_.addLink(r.location_id, hypothesis, LinkKind::kLoopClosure);
   }
+}
+
+std::optional<storage::ClosurePose> MapImpl::closurePose(std::int64_t hypothesis,
+                                                         const GeometricResult& geometry) {
+  const auto location = store_->location(hypothesis);
+  if (!location) return std::nullopt;
+  const CameraIntrinsics theirs = sessionIntrinsics(location->session_id);
+  if (!theirs.known()) return std::nullopt;
+  if (geometry.still) {
+    // The pairs did not move: no rotation, and no translation to give a direction to.
+    if (geometry.agreeing_query.empty()) return std::nullopt;
+    storage::ClosurePose pose;
+    pose.inliers = static_cast<std::int64_t>(geometry.agreeing_query.size());
+    return pose;
+  }
+  RelativePoseSettings settings;
+  settings.max_error_px = options_.geometry_max_error_px;
+  return relativePose(geometry.agreeing_query, intrinsicsOf(options_), geometry.agreeing_candidate,
+                      theirs, settings);
+}
+
+CameraIntrinsics MapImpl::sessionIntrinsics(std::int64_t session_id) {
+  if (session_id_ && session_id == *session_id_) return intrinsicsOf(options_);
+  if (auto known = session_intrinsics_.find(session_id); known != session_intrinsics_.end())
+    return known->second;
+  // Another session's camera, as it was set when that session began.
+  CameraIntrinsics camera;
+  try {
+    camera = intrinsicsOf(Options::fromSettings(store_->settings(session_id)));
+  } catch (const Error&) {
+    // Settings this binary cannot read: no camera, so no pose (the decision stands).
+  }
+  session_intrinsics_[session_id] = camera;
+  return camera;
 }
 
 void MapImpl::manageMemory(std::int64_t hypothesis, double memory_ms, FrameWrite& w,

@@ -184,6 +184,7 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   v.checked = choice.checked;
   if (choice.result) {
     v.location = choice.location;
+    v.geometry = *choice.result;
     v.passed = choice.passed;
     v.temporal = choice.temporal;
     v.inliers = choice.result->inliers;

@@ -9,6 +9,7 @@ target_sources(placedb_engine PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/map_open.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_process.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_query.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/map_verify.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/map_verify.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/relative_pose.cpp)
 # The geometric check's fundamental matrix (OpenCV's imported target exists once OpenCV is found).
 target_link_libraries(placedb_engine PRIVATE opencv_calib3d)

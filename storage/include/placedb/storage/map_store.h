@@ -167,6 +167,8 @@ class MapStore {
   // Loop-closure hypotheses, one per frame.
   void insertHypothesis(const HypothesisRecord& hypothesis);
   std::optional<HypothesisRecord> hypothesis(std::int64_t frame_id) const;
+  // Every accepted hypothesis that carries a pose (schema 7), by frame id.
+  std::vector<ClosurePoseRecord> closurePoses() const;
 
   // Engine state for an exact resume.
   void putState(const std::string& key, const std::vector<std::uint8_t>& value);

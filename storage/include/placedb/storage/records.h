@@ -95,13 +95,32 @@ struct LinkRecord {  // stored with location_a < location_b
   std::optional<double> score;
 };
 
+// An accepted loop closure's relative pose (schema 7): the frame's camera in the camera of the
+// hypothesis' location. A point X in the frame's camera is R X + s t in the location's, for an
+// unknown scale s > 0 (one camera measures none).
+struct ClosurePose {
+  double qw = 1, qx = 0, qy = 0, qz = 0;  // R as a unit quaternion
+  double tx = 0, ty = 0, tz = 0;          // t, unit length; 0 0 0 when the camera did not move
+  std::int64_t inliers = 0;               // pairs that agreed with the essential matrix
+};
+
 struct HypothesisRecord {
   std::int64_t frame_id = 0;
   std::optional<std::int64_t> best_location_id;
   double posterior = 0;
   double loop_probability = 0;
   bool accepted = false;
-  std::string rejected_reason;  // empty when accepted or not applicable (stored as NULL)
+  std::string rejected_reason;      // empty when accepted or not applicable (stored as NULL)
+  std::optional<ClosurePose> pose;  // none without intrinsics (stored as NULL)
+};
+
+// A row of v_loop_closure_poses: the hypothesis of frame_id, made at frame_location_id, named
+// hypothesis_location_id and was accepted with a pose.
+struct ClosurePoseRecord {
+  std::int64_t frame_id = 0;
+  std::int64_t frame_location_id = 0;
+  std::int64_t hypothesis_location_id = 0;
+  ClosurePose pose;
 };
 
 // One internal node of the vocabulary's kd-forest (table kd_nodes).
