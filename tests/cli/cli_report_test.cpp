@@ -73,6 +73,29 @@ TEST_F(ReportTest, OnePageWithScoresFiguresAndClosures) {
             std::min<std::size_t>(std::stoul(accepted[1]), 2));
 }
 
+// The thumbnails come from the session that wrote the log, not from the map's last session.
+TEST_F(ReportTest, ThumbnailsOfTheLogsSession) {
+  const fs::path copy = dir_ / "copy";
+  fs::copy(data_, copy, fs::copy_options::recursive);
+  auto second = placedb({"map", map_.string(), (copy / "frames.txt").string(), "--quiet"}, dir_);
+  ASSERT_EQ(second.exit_code, 0) << describe(second);
+  const fs::path out = dir_ / "first";
+  auto r = placedb({"report", map_.string(), log_.string(), gt_.string(), "--out", out.string(),
+                    "--max-right", "2"},
+                   dir_);
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  const std::string page = bytesOf(out / "index.html");
+  EXPECT_NE(page.find("(session 1)"), std::string::npos);
+  EXPECT_NE(page.find("title=\"" + data_.string()), std::string::npos);
+  EXPECT_EQ(page.find(copy.string()), std::string::npos);
+  auto other = placedb({"report", map_.string(), log_.string(), gt_.string(), "--out",
+                        (dir_ / "second").string(), "--session", "2", "--max-right", "2"},
+                       dir_);
+  ASSERT_EQ(other.exit_code, 0) << describe(other);
+  EXPECT_NE(bytesOf(dir_ / "second" / "index.html").find("title=\"" + copy.string()),
+            std::string::npos);
+}
+
 TEST_F(ReportTest, RefusalsNameTheFileAndWriteNothing) {
   const fs::path out = dir_ / "refused";
   auto report = [&](const fs::path& map, const fs::path& log, const fs::path& gt,

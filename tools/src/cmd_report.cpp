@@ -44,7 +44,9 @@ Command addReportCommand(CLI::App& parent) {
   app->add_option("--window,-w", request->window, "tolerance in frames, as for `placedb eval`")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  app->add_option("--session", *session, "session of MAP the log belongs to (default: last)");
+  app->add_option("--session", *session,
+                  "session of MAP the log belongs to (default: the log's session column, else the "
+                  "last)");
   app->add_option("--max-wrong", request->max_wrong, "wrong closures shown")->capture_default_str();
   app->add_option("--max-right", request->max_right, "right closures shown")->capture_default_str();
   return {app, [request, session, app]() {

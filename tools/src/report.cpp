@@ -17,6 +17,7 @@
 
 #include "base64.h"
 #include "cmd_eval.h"
+#include "frame_log.h"
 #include "placedb/error.h"
 #include "placedb/storage/map_store.h"
 #include "report_page.h"
@@ -120,6 +121,16 @@ std::string thumbnail(const fs::path& path) {
   }
 }
 
+// The session in the log's first row; nullopt for a log without the column (the bare format).
+std::optional<std::int64_t> sessionOfLog(const fs::path& log) {
+  const CsvTable table = readCsv(log);
+  const std::string& cell = table.cell(0, table.column("session"));
+  char* end = nullptr;
+  const long long id = std::strtoll(cell.c_str(), &end, 10);
+  if (cell.empty() || *end != '\0') return std::nullopt;
+  return id;
+}
+
 // The file is written beside its final name and renamed when whole: a reader (or a full disk)
 // never sees half a page.
 void writeWhole(const fs::path& target, const std::string& text) {
@@ -216,15 +227,18 @@ ReportSummary writeReport(const ReportRequest& request) {
   requireWritableFolder(request.out);
 
   storage::MapStore store(request.map.string(), storage::OpenMode::kReadOnly);
+  // The log names the session that wrote it: its thumbnails come from that session's frames.
+  const std::optional<std::int64_t> wanted =
+      request.session ? request.session : sessionOfLog(request.log);
   std::optional<storage::SessionRecord> session;
   for (auto& s : store.sessions())
-    if (!request.session || s.id == *request.session) session = s;
+    if (!wanted || s.id == *wanted) session = s;
   if (!session)
     throw Error(
         ErrorCode::kInvalidArgument,
-        request.session
-            ? fmt::format("map {} has no session {}", request.map.string(), *request.session)
-            : fmt::format("map {} has no session: map a sequence first", request.map.string()));
+        wanted ? fmt::format("map {} has no session {}{}", request.map.string(), *wanted,
+                             request.session ? "" : " (the session of the log's rows)")
+               : fmt::format("map {} has no session: map a sequence first", request.map.string()));
   std::map<std::int64_t, std::string> image_of;  // source index -> stored path
   for (const auto& frame : store.frames(session->id))
     image_of[frame.source_index] = frame.source_path;

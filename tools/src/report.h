@@ -17,9 +17,11 @@ namespace placedb::cli {
 struct ReportRequest {
   std::filesystem::path map, log, gt, out;
   int window = 0;
-  std::optional<std::int64_t> session;  // of the map the log belongs to; default: the last one
-  std::size_t max_wrong = 48;           // wrong closures shown (all of them up to this)
-  std::size_t max_right = 24;           // right closures shown, spread over the run
+  // The session of the map the log belongs to; default: the log's `session` column, else the
+  // map's last session.
+  std::optional<std::int64_t> session;
+  std::size_t max_wrong = 48;  // wrong closures shown (all of them up to this)
+  std::size_t max_right = 24;  // right closures shown, spread over the run
 };
 
 struct ReportSummary {
