@@ -96,6 +96,18 @@ TEST_F(ReportTest, ThumbnailsOfTheLogsSession) {
             std::string::npos);
 }
 
+// A page the disk has no room for is exit 7 and leaves no file, whole or partial.
+TEST_F(ReportTest, FullDiskLeavesNoPage) {
+  TinyDisk disk(dir_ / "disk", "64k");
+  if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs here (needs CAP_SYS_ADMIN)";
+  const fs::path out = dir_ / "disk" / "report";
+  auto r =
+      placedb({"report", map_.string(), log_.string(), gt_.string(), "--out", out.string()}, dir_);
+  expectCleanError(r, 7, (out / "index.html").string());
+  ASSERT_TRUE(fs::is_directory(out));
+  EXPECT_EQ(std::distance(fs::directory_iterator(out), fs::directory_iterator()), 0);
+}
+
 TEST_F(ReportTest, RefusalsNameTheFileAndWriteNothing) {
   const fs::path out = dir_ / "refused";
   auto report = [&](const fs::path& map, const fs::path& log, const fs::path& gt,
