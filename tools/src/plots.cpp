@@ -27,7 +27,8 @@ enum Colour {
   kBrown = 8,
   kPink = 9,
   kOlive = 10,
-  kCyan = 11
+  kCyan = 11,
+  kVeil = 12  // translucent white behind a legend
 };
 
 // PLplot ends the process on a fatal error; this at least makes it one placedb error line with
@@ -75,6 +76,7 @@ class Figure {
     plscol0(kPink, 227, 119, 194);
     plscol0(kOlive, 188, 189, 34);
     plscol0(kCyan, 23, 190, 207);
+    plscol0a(kVeil, 255, 255, 255, 0.8);
     plcol0(kInk);
     plenv(x.lo, x.hi, y.lo, y.hi, 0, 2);  // 2: axes with a grid
     pllab(xlabel.c_str(), ylabel.c_str(), title.c_str());
@@ -146,9 +148,13 @@ class Figure {
     for (double v : x) pljoin(v, y0, v, y1);
   }
   // A hand-placed text legend inside the top (or bottom) left corner: PLplot's pllegend needs
-  // many parallel arrays for little gain.
+  // many parallel arrays for little gain. A translucent veil under it keeps the text readable
+  // over grid lines and data without hiding the data.
   void legend(const std::vector<std::pair<Colour, std::string>>& entries, bool bottom = false) {
     const double n = static_cast<double>(entries.size());
+    std::size_t longest = 0;
+    for (const auto& entry : entries) longest = std::max(longest, entry.second.size());
+    veil(static_cast<double>(longest), (bottom ? 2.0 : 2.2) + 1.3 * (n - 1), bottom);
     for (std::size_t i = 0; i < entries.size(); ++i) {
       const double row = static_cast<double>(i);
       plcol0(entries[i].first);
@@ -158,6 +164,32 @@ class Figure {
         plmtex("t", -1.5 - 1.3 * row, 0.02, 0.0, entries[i].second.c_str());
     }
     plcol0(kInk);
+  }
+
+ private:
+  // A box from the left edge, `chars` characters wide and `lines` character heights tall, at the
+  // top or bottom of the plot. Sizes are in millimetres on the page, turned into world units.
+  void veil(double chars, double lines, bool bottom) {
+    PLFLT default_height = 0, height = 0;
+    plgchr(&default_height, &height);
+    PLFLT page_x0 = 0, page_x1 = 0, page_y0 = 0, page_y1 = 0;
+    plgspa(&page_x0, &page_x1, &page_y0, &page_y1);
+    PLFLT vp_x0 = 0, vp_x1 = 0, vp_y0 = 0, vp_y1 = 0;
+    plgvpd(&vp_x0, &vp_x1, &vp_y0, &vp_y1);
+    PLFLT x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+    plgvpw(&x0, &x1, &y0, &y1);
+    const double width_mm = (vp_x1 - vp_x0) * (page_x1 - page_x0);
+    const double height_mm = (vp_y1 - vp_y0) * (page_y1 - page_y0);
+    if (width_mm <= 0 || height_mm <= 0) return;
+    // 0.7 character heights a character: a little wider than the average glyph.
+    const double w = std::min(1.0, 0.02 + (0.7 * chars + 1.0) * height / width_mm);
+    const double h = std::min(1.0, lines * height / height_mm);
+    const double left = x0, right = x0 + w * (x1 - x0);
+    const double low = bottom ? y0 : y1 - h * (y1 - y0), high = bottom ? y0 + h * (y1 - y0) : y1;
+    std::vector<double> xs = {left, right, right, left}, ys = {low, low, high, high};
+    plcol0(kVeil);
+    plpsty(0);
+    plfill(4, xs.data(), ys.data());
   }
 };
 
@@ -209,17 +241,17 @@ bool precisionRecallPlot(const fs::path& folder, const Evaluation& evaluation) {
   std::vector<std::pair<Colour, std::string>> legend = {{kBlue, "curve over score thresholds"}};
   if (has_r100) {
     figure.points({f.recall_at_100_precision}, {100.0}, kGreen, 11, 2.5);
-    legend.push_back({kGreen, fmt::format("R@100P (window {}): recall {:.2f}% at 100% precision",
+    legend.push_back({kGreen, fmt::format("R@100P (window {}): {:.2f}% recall at 100% precision",
                                           f.window, f.recall_at_100_precision)});
   }
   if (has_operating) {
     figure.points({*f.accepted_recall}, {*f.accepted_precision}, kRed, 4, 2.5);
-    legend.push_back({kRed, fmt::format("accepted by the engine: precision {:.2f}%, recall "
-                                        "{:.2f}% ({} right, {} wrong)",
+    legend.push_back({kRed, fmt::format("accepted: precision {:.2f}%, recall {:.2f}% ({} right, "
+                                        "{} wrong)",
                                         *f.accepted_precision, *f.accepted_recall, f.accepted_true,
                                         f.accepted_false)});
   } else {
-    legend.push_back({kRed, "accepted by the engine: none"});
+    legend.push_back({kRed, "accepted: none"});
   }
   figure.legend(legend, true);
   return true;
@@ -239,7 +271,7 @@ std::vector<double> scoresAt(const RunSeries& s, const std::vector<double>& fram
 bool scorePlot(const fs::path& folder, const RunSeries& s) {
   if (s.score.empty() || s.score.size() != s.frame.size()) return false;
   Range y = rangeOf(s.score, true);
-  y.hi = std::max(y.hi, 1.0) * 1.25;  // headroom for the legend
+  y.hi = std::max(y.hi, 1.0) * 1.45;  // headroom for the legend
   Figure figure(folder / "score.png", rangeOf(s.frame, false), y, "frame", "loop-closure score",
                 "Best hypothesis' score per frame");
   // Two bands along the bottom: every ground-truth loop frame (grey), and under it those the
