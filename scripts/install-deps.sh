@@ -14,6 +14,7 @@ packages=(
   libplplot-dev plplot-driver-cairo
   python3 python3-dev pybind11-dev python3-numpy python3-pytest
   clang-format
+  chromium  # opens `placedb report` pages in the headless browser test (tests/tools)
 )
 if [[ "${1:-}" == "--fuzz" ]]; then
   packages+=(clang-14 libclang-rt-14-dev)

@@ -16,6 +16,9 @@ add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/plots.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/loop_matrix.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/run_series.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/base64.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/report.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/report_page.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/mapping_run.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_query.cpp
@@ -24,7 +27,8 @@ add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_eval.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_demo.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/graph_export.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_export.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_export.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_report.cpp)
 target_include_directories(placedb_cli PUBLIC ${CMAKE_CURRENT_LIST_DIR}/src)
 # The vocab command uses an engine internal (the vocabulary file); the demo renders synthetic
 # sequences.

@@ -125,13 +125,15 @@ TEST(CliRealSequence, MapEvalInfoQueryOnRtabmapSamples) {
   ASSERT_EQ(from_map.exit_code, 0) << describe(from_map);
   EXPECT_FALSE(cv::imread((dir / "bare_plots" / "vocabulary.png").string()).empty());
   EXPECT_FALSE(cv::imread((dir / "bare_plots" / "wm_size.png").string()).empty());
+  EXPECT_FALSE(cv::imread((dir / "bare_plots" / "time_by_stage.png").string()).empty());
 
   auto plotted = placedb({"eval", log.string(), (data / "gt_pairs.txt").string(), "--plots",
                           (dir / "plots").string(), "--map", map.string()},
                          dir);
   ASSERT_EQ(plotted.exit_code, 0) << describe(plotted);
-  for (const char* png : {"precision_recall.png", "score.png", "vocabulary.png",
-                          "quantisation_error.png", "wm_size.png", "time.png", "loop_matrix.png"}) {
+  for (const char* png :
+       {"precision_recall.png", "score.png", "vocabulary.png", "quantisation_error.png",
+        "wm_size.png", "time.png", "time_by_stage.png", "loop_matrix.png"}) {
     cv::Mat image = cv::imread((dir / "plots" / png).string());
     EXPECT_FALSE(image.empty()) << png;
   }

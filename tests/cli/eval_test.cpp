@@ -1,6 +1,7 @@
 // `placedb eval` must print exactly what the reference scorer score_loops.py prints.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -171,6 +172,39 @@ TEST(RunSeries, BadFramesAreGapsNotZeros) {
   }
   EXPECT_DOUBLE_EQ(series.vocabulary_size[2], 180);
   EXPECT_DOUBLE_EQ(series.time_ms[1], 4);
+}
+
+// Accepted closures split into right and wrong; a loop frame without a right closure is missed;
+// the filter's stage excludes the geometric check, which is a stage of its own.
+TEST(RunSeries, RightWrongMissedAndStages) {
+  CsvTable log;
+  log.header = {"frame",   "candidate_frames", "score",     "accepted",        "time_ms",
+                "outcome", "features_ms",      "filter_ms", "verification_ms", "storage_ms"};
+  log.rows = {{"0", "", "0", "0", "5", "new", "2", "1", "0", "1"},
+              {"1", "0", "0.9", "1", "9", "new", "3", "4", "3", "2"},
+              {"2", "0", "0.8", "1", "9", "merged", "3", "4", "1", "2"},
+              {"3", "", "0", "0", "1", "bad", "1", "0", "0", "0"},
+              {"4", "1", "0.2", "0", "7", "new", "3", "2", "1", "2"}};
+  const GroundTruth gt = {{1, {0}}, {3, {0}}, {4, {1}}};
+  const Evaluation eval = evaluate(log, gt, 0);
+  const RunSeries series = buildRunSeries(log, eval, gt);
+  EXPECT_EQ(series.accepted_right, std::vector<double>({1}));
+  EXPECT_EQ(series.accepted_wrong, std::vector<double>({2}));  // frame 2 has no loop
+  EXPECT_EQ(series.gt_loop_frames, std::vector<double>({1, 3, 4}));
+  EXPECT_EQ(series.missed_loops, std::vector<double>({3, 4}));  // 4 was right but not accepted
+  std::vector<std::string> names;
+  for (const auto& stage : series.stages) names.push_back(stage.name);
+  EXPECT_EQ(names, std::vector<std::string>({"features", "filter", "verification", "storage"}));
+  EXPECT_DOUBLE_EQ(series.stages[1].ms[1], 1.0);  // filter 4 less verification 3
+  for (const auto& stage : series.stages) EXPECT_TRUE(std::isnan(stage.ms[3])) << stage.name;
+
+  const auto dir = scratchDir("RunSeries_plots");
+  std::vector<std::string> files;
+  for (const auto& plot : writePlots(series, eval, dir)) files.push_back(plot.file);
+  for (const char* png : {"precision_recall.png", "score.png", "time_by_stage.png"}) {
+    EXPECT_NE(std::find(files.begin(), files.end(), png), files.end()) << png;
+    EXPECT_FALSE(cv::imread((dir / png).string()).empty()) << png;
+  }
 }
 
 // Frame 8 revisits 1 (found), 9 revisits 2 (missed; 9 took 5 instead): white, green, red pixels.

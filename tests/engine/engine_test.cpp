@@ -60,6 +60,22 @@ TEST_F(EngineTest, FeaturelessImageIsABadFrameAndNoLocation) {
   EXPECT_EQ(sqlCount(path_, "SELECT count(*) FROM locations"), 1);
 }
 
+// Every frame row holds the time of its own writes, and the total includes it.
+TEST_F(EngineTest, FramesStoreTheirStorageTime) {
+  auto map = Map::open(path_.string(), Options());
+  map->beginSession("timed");
+  for (int i = 0; i < 4; ++i) map->process(seq_->images[static_cast<std::size_t>(i)], i, "a");
+  map->recordUnreadable(4, "missing.png");
+  map->close();
+  EXPECT_EQ(sqlCount(path_, "SELECT count(*) FROM frames"), 5);
+  EXPECT_EQ(sqlCount(path_, "SELECT count(*) FROM frames WHERE storage_ms > 0"), 5);
+  EXPECT_EQ(sqlCount(path_,
+                     "SELECT count(*) FROM frames WHERE abs(total_ms - (features_ms + "
+                     "quantisation_ms + likelihood_ms + filter_ms + memory_ms + storage_ms)) "
+                     "> 1e-6"),
+            0);
+}
+
 TEST_F(EngineTest, LoopClosuresLinkRevisitsAndSettingsAreStored) {
   // Ground truth: lines "q r", frame q revisits frame r.
   std::map<std::int64_t, std::vector<std::int64_t>> truth;

@@ -18,7 +18,7 @@ EvalOutcome runEvaluation(const EvalRequest& request) {
   if (!request.plots_dir.empty()) {
     RunSeries series =
         buildRunSeries(log, outcome.evaluation, gt, request.map_path, request.session);
-    outcome.plots = writePlots(series, outcome.evaluation.pr_curve, request.plots_dir);
+    outcome.plots = writePlots(series, outcome.evaluation, request.plots_dir);
     outcome.plots.push_back(writeLoopMatrix(outcome.evaluation, gt, request.plots_dir));
   }
   return outcome;
@@ -47,7 +47,7 @@ Command addEvalCommand(CLI::App& parent) {
       ->check(CLI::NonNegativeNumber);
   app->add_option("--plots", request->plots_dir,
                   "write PNG figures (precision-recall, score, vocabulary, quantisation error, "
-                  "WM size, time per frame) into this folder");
+                  "WM size, time per frame and by stage, loop matrix) into this folder");
   app->add_option("--map", request->map_path,
                   "take the series the log lacks (vocabulary, WM, times) from this map");
   app->add_option("--session", *session, "session of --map the log belongs to (default: last)");

@@ -225,10 +225,13 @@ Evaluation evaluate(const CsvTable& log, const GroundTruth& gt, int window) {
   return eval;
 }
 
+std::vector<std::pair<std::string, std::string>> figureRows(const EvalFigures& figures) {
+  return figureFields(figures, false);
+}
+
 std::string figuresText(const EvalFigures& figures) {
   std::string text;
-  for (const auto& [key, value] : figureFields(figures, false))
-    text += fmt::format("{}: {}\n", key, value);
+  for (const auto& [key, value] : figureRows(figures)) text += fmt::format("{}: {}\n", key, value);
   return text;
 }
 

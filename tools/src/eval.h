@@ -10,6 +10,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "frame_log.h"
@@ -55,6 +56,8 @@ struct Evaluation {
 // Throws placedb::Error(kInvalidArgument) when a scored column is missing or a value is bad.
 Evaluation evaluate(const CsvTable& log, const GroundTruth& gt, int window);
 
+// The figures as (key, value) in score_loops.py's order and text form, for other layouts.
+std::vector<std::pair<std::string, std::string>> figureRows(const EvalFigures& figures);
 // "key: value" lines, byte for byte as score_loops.py prints them.
 std::string figuresText(const EvalFigures& figures);
 // One JSON object, byte for byte as score_loops.py --json prints it (NaN where Python has NaN).

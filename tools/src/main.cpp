@@ -23,6 +23,8 @@ int run(int argc, char** argv) {
       "Typical use:\n"
       "  placedb map run.placedb images/ --log run.csv      map a folder, log every frame\n"
       "  placedb eval run.csv gt_pairs.txt --plots plots/   score the run, draw its figures\n"
+      "  placedb report run.placedb run.csv gt.txt --out r/ one HTML page: scores, figures,\n"
+      "                                                     thumbnails of the closures\n"
       "  placedb query run.placedb photo.jpg                where was this photo taken?\n"
       "  placedb info run.placedb                           what the map holds\n"
       "  placedb export run.placedb g.g2o --format g2o      graph for a pose-graph optimiser\n"
@@ -48,7 +50,8 @@ int run(int argc, char** argv) {
       placedb::cli::addMapCommand(app),      placedb::cli::addQueryCommand(app),
       placedb::cli::addInfoCommand(app),     placedb::cli::addVocabCommand(app),
       placedb::cli::addEvalCommand(app),     placedb::cli::addDemoCommand(app),
-      placedb::cli::addSettingsCommand(app), placedb::cli::addExportCommand(app)};
+      placedb::cli::addSettingsCommand(app), placedb::cli::addExportCommand(app),
+      placedb::cli::addReportCommand(app)};
 
   try {
     app.parse(argc, argv);

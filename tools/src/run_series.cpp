@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -53,6 +54,43 @@ void fillFromMap(RunSeries& series, const std::string& map_path,
   from_map(series.wm_size,
            [](const storage::FrameRecord& r) { return static_cast<double>(r.stats.wm_size); });
   from_map(series.time_ms, [](const storage::FrameRecord& r) { return r.timings.total_ms; });
+  if (!series.stages.empty()) return;
+  // The map keeps no verification time of its own: it stays inside the filter's.
+  const std::pair<const char*, double storage::FrameTimings::*> kMapStages[] = {
+      {"features", &storage::FrameTimings::features_ms},
+      {"quantisation", &storage::FrameTimings::quantisation_ms},
+      {"likelihood", &storage::FrameTimings::likelihood_ms},
+      {"filter", &storage::FrameTimings::filter_ms},
+      {"memory", &storage::FrameTimings::memory_ms},
+      {"storage", &storage::FrameTimings::storage_ms}};
+  for (const auto& [name, member] : kMapStages) {
+    RunSeries::Stage stage{name, {}};
+    from_map(stage.ms,
+             [member = member](const storage::FrameRecord& r) { return r.timings.*member; });
+    series.stages.push_back(std::move(stage));
+  }
+}
+
+// The log's stage columns in stacking order. The geometric check's time is part of filter_ms;
+// it is shown as a stage of its own and taken out of the filter's.
+std::vector<RunSeries::Stage> stagesOfLog(const CsvTable& log) {
+  std::vector<RunSeries::Stage> stages;
+  for (const char* name :
+       {"features", "quantisation", "likelihood", "filter", "verification", "memory", "storage"}) {
+    std::vector<double> ms = numericColumn(log, std::string(name) + "_ms");
+    if (!ms.empty()) stages.push_back({name, std::move(ms)});
+  }
+  auto find = [&stages](const std::string& name) -> RunSeries::Stage* {
+    for (auto& stage : stages)
+      if (stage.name == name) return &stage;
+    return nullptr;
+  };
+  RunSeries::Stage* filter = find("filter");
+  const RunSeries::Stage* verification = find("verification");
+  if (filter && verification)
+    for (std::size_t i = 0; i < filter->ms.size(); ++i)
+      filter->ms[i] = std::max(0.0, filter->ms[i] - verification->ms[i]);
+  return stages;
 }
 
 }  // namespace
@@ -63,16 +101,24 @@ RunSeries buildRunSeries(const CsvTable& log, const Evaluation& eval, const Grou
   for (const auto& f : eval.frames) {
     series.frame.push_back(static_cast<double>(f.frame));
     series.score.push_back(f.score);
-    if (f.accepted) series.accepted_frames.push_back(static_cast<double>(f.frame));
-    if (gt.count(f.frame)) series.gt_loop_frames.push_back(static_cast<double>(f.frame));
+    const auto x = static_cast<double>(f.frame);
+    // As evaluate() counts them: a closure is right when it has a candidate near the truth.
+    const bool right = f.accepted && f.correct && !f.candidates.empty();
+    if (f.accepted) (right ? series.accepted_right : series.accepted_wrong).push_back(x);
+    if (gt.count(f.frame)) {
+      series.gt_loop_frames.push_back(x);
+      if (!right) series.missed_loops.push_back(x);
+    }
   }
   series.vocabulary_size = numericColumn(log, "vocabulary_size");
   series.mean_quantisation_error = numericColumn(log, "mean_quantisation_error");
   series.wm_size = numericColumn(log, "wm_size");
   series.time_ms = numericColumn(log, "time_ms");
+  series.stages = stagesOfLog(log);
   if (!map_path.empty()) fillFromMap(series, map_path, session);
   // A bad frame has no hypothesis, words or tiers of its own: its figures are gaps, not zeros.
-  // Its time is real and stays.
+  // Its total time is real and stays; its stage times are gaps, since it stopped before the
+  // stages and a stack of near-zero bars would read as a fast frame.
   const int outcome = log.column("outcome");
   if (outcome >= 0 && log.rows.size() == series.frame.size()) {
     for (std::size_t i = 0; i < log.rows.size(); ++i) {
@@ -80,6 +126,8 @@ RunSeries buildRunSeries(const CsvTable& log, const Evaluation& eval, const Grou
       for (auto* values : {&series.score, &series.vocabulary_size, &series.mean_quantisation_error,
                            &series.wm_size})
         if (i < values->size()) (*values)[i] = std::nan("");
+      for (auto& stage : series.stages)
+        if (i < stage.ms.size()) stage.ms[i] = std::nan("");
     }
   }
   return series;

@@ -444,16 +444,6 @@ void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_pa
       static_cast<std::int64_t>(r.stm_size),        r.mean_quantisation_error};
   try {
     auto tx = store_->begin();
-    const auto& t = r.times;
-    // The row's storage and total times stop here: the commit below cannot time itself.
-    w.frame.timings = {t.features,
-                       t.quantisation,
-                       t.likelihood,
-                       t.filter,
-                       t.memory,
-                       0,
-                       t.features + t.quantisation + t.likelihood + t.filter + t.memory};
-    store_->insertFrame(w.frame);
     if (!w.words.empty()) store_->insertWords(w.words);
     if (w.new_location) {
       store_->insertLocation(*w.new_location);
@@ -475,6 +465,21 @@ void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_pa
     counters_.next_wm_age = tiers_->nextAge();
     counters_.save(*store_);
     vocabulary_state_.save(*store_, *vocabulary_);
+    // The frame's row goes last (foreign keys are checked at commit) so that its storage_ms
+    // holds the time of every other write of the frame; only this insert and the COMMIT (a WAL
+    // append, no fsync under synchronous=NORMAL) are missing from it. The log's storage time,
+    // taken after the commit, has them.
+    const auto& t = r.times;
+    const double storage_ms = msSince(stage);
+    w.frame.timings = {
+        t.features,
+        t.quantisation,
+        t.likelihood,
+        t.filter,
+        t.memory,
+        storage_ms,
+        t.features + t.quantisation + t.likelihood + t.filter + t.memory + storage_ms};
+    store_->insertFrame(w.frame);
     tx.commit();
   } catch (...) {
     broken_ = true;  // RAM is one frame ahead of the file now

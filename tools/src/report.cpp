@@ -1,0 +1,303 @@
+#include "report.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "base64.h"
+#include "cmd_eval.h"
+#include "frame_log.h"
+#include "placedb/error.h"
+#include "placedb/storage/map_store.h"
+#include "report_page.h"
+
+namespace placedb::cli {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr int kThumbnailWidth = 200;  // two pairs side by side on the page (report_page.cpp)
+
+// The plots are drawn into a folder of their own outside DIR and inlined from there, so a run
+// refused half way leaves nothing in DIR; the folder goes when the report is done or refused.
+class ScratchFolder {
+ public:
+  ScratchFolder()
+      : path_(fs::temp_directory_path() / fmt::format("placedb-report-{}", ::getpid())) {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  ~ScratchFolder() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  ScratchFolder(const ScratchFolder&) = delete;
+  ScratchFolder& operator=(const ScratchFolder&) = delete;
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+void requireReadableFile(const fs::path& path, const char* what) {
+  std::error_code ec;
+  if (!fs::exists(path, ec))
+    throw Error(ErrorCode::kIo,
+                fmt::format("cannot read {} {}: no such file", what, path.string()));
+  if (fs::is_directory(path, ec))
+    throw Error(ErrorCode::kIo,
+                fmt::format("cannot read {} {}: it is a folder, not a file", what, path.string()));
+  if (::access(path.c_str(), R_OK) != 0)
+    throw Error(ErrorCode::kIo,
+                fmt::format("cannot read {} {}: {}", what, path.string(), std::strerror(errno)));
+}
+
+// DIR may exist (a folder: index.html in it is replaced) or be made; the first folder of it
+// that exists must be writable.
+void requireWritableFolder(const fs::path& out) {
+  std::error_code ec;
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+    throw Error(
+        ErrorCode::kIo,
+        fmt::format("cannot write report into {}: it is a file, not a folder", out.string()));
+  fs::path existing = fs::absolute(out, ec);
+  while (!existing.empty() && !fs::exists(existing, ec)) existing = existing.parent_path();
+  if (!fs::is_directory(existing, ec))
+    throw Error(ErrorCode::kIo, fmt::format("cannot write report into {}: {} is not a folder",
+                                            out.string(), existing.string()));
+  if (::access(existing.c_str(), W_OK) != 0)
+    throw Error(ErrorCode::kIo, fmt::format("cannot write report into {}: {}: {}", out.string(),
+                                            existing.string(), std::strerror(errno)));
+}
+
+std::vector<std::uint8_t> readBytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(ErrorCode::kIo, fmt::format("cannot read {}", path.string()));
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// A frame's stored path is as `map` saw it: absolute, or relative to the folder it ran in. A
+// relative one that is not found from here is looked for under the session's source folder,
+// by its trailing components (a list file's paths are relative to the list file).
+fs::path locateImage(const std::string& stored, const fs::path& source) {
+  std::error_code ec;
+  const fs::path path(stored);
+  if (fs::is_regular_file(path, ec)) return path;
+  if (path.is_absolute()) return {};
+  const fs::path base = fs::is_directory(source, ec) ? source : source.parent_path();
+  const std::vector<fs::path> parts(path.begin(), path.end());
+  for (std::size_t first = 0; first < parts.size(); ++first) {
+    fs::path tail;
+    for (std::size_t i = first; i < parts.size(); ++i) tail /= parts[i];
+    if (fs::is_regular_file(base / tail, ec)) return base / tail;
+  }
+  return {};
+}
+
+// A JPEG data: URI of the image shrunk to the thumbnail width; empty when it cannot be read.
+std::string thumbnail(const fs::path& path) {
+  if (path.empty()) return {};
+  try {
+    cv::Mat image = cv::imread(path.string(), cv::IMREAD_COLOR);
+    if (image.empty()) return {};
+    const double scale = static_cast<double>(kThumbnailWidth) / image.cols;
+    if (scale < 1.0)
+      cv::resize(image, image, cv::Size(), scale, scale, cv::INTER_AREA);  // no aliasing
+    std::vector<std::uint8_t> jpeg;
+    if (!cv::imencode(".jpg", image, jpeg, {cv::IMWRITE_JPEG_QUALITY, 85})) return {};
+    return "data:image/jpeg;base64," + base64Encode(jpeg);
+  } catch (const cv::Exception&) {
+    return {};
+  }
+}
+
+// The session in the log's first row; nullopt for a log without the column (the bare format).
+std::optional<std::int64_t> sessionOfLog(const fs::path& log) {
+  const CsvTable table = readCsv(log);
+  const std::string& cell = table.cell(0, table.column("session"));
+  char* end = nullptr;
+  const long long id = std::strtoll(cell.c_str(), &end, 10);
+  if (cell.empty() || *end != '\0') return std::nullopt;
+  return id;
+}
+
+// The file is written beside its final name and renamed when whole: a reader (or a full disk)
+// never sees half a page.
+void writeWhole(const fs::path& target, const std::string& text) {
+  const fs::path partial = target.string() + fmt::format(".partial-{}", ::getpid());
+  auto fail = [&](int error) {
+    std::error_code ec;
+    fs::remove(partial, ec);
+    const bool full = error == ENOSPC || error == EFBIG || error == EDQUOT;
+    throw Error(full ? ErrorCode::kDiskFull : ErrorCode::kIo,
+                fmt::format("cannot write {}: {}", target.string(), std::strerror(error)));
+  };
+  std::FILE* file = std::fopen(partial.c_str(), "wb");
+  if (!file) fail(errno);
+  const bool written =
+      std::fwrite(text.data(), 1, text.size(), file) == text.size() && std::fflush(file) == 0;
+  const int error = errno;
+  if (std::fclose(file) != 0 || !written) fail(written ? errno : error);
+  if (std::rename(partial.c_str(), target.c_str()) != 0) fail(errno);
+}
+
+}  // namespace
+
+std::string htmlEscape(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  for (char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+Gallery closureGallery(const Evaluation& evaluation, const GroundTruth& gt, std::size_t max_wrong,
+                       std::size_t max_right) {
+  Gallery gallery;
+  const int window = evaluation.figures.window;
+  for (const auto& f : evaluation.frames) {
+    if (!f.accepted || f.candidates.empty()) continue;
+    GalleryEntry entry;
+    entry.frame = f.frame;
+    entry.matched = f.candidates.front();
+    entry.score = f.score;
+    entry.right = f.correct;
+    if (auto refs = gt.find(f.frame); refs != gt.end()) {
+      entry.truth.assign(refs->second.begin(), refs->second.end());
+      // The candidate that made the closure right, as evaluate() judged it.
+      auto near_truth = [&](std::int64_t c) {
+        return std::any_of(refs->second.begin(), refs->second.end(),
+                           [&](std::int64_t r) { return std::llabs(c - r) <= window; });
+      };
+      auto it = std::find_if(f.candidates.begin(), f.candidates.end(), near_truth);
+      if (entry.right && it != f.candidates.end()) entry.matched = *it;
+    }
+    (entry.right ? gallery.right : gallery.wrong).push_back(std::move(entry));
+  }
+  gallery.wrong_total = gallery.wrong.size();
+  gallery.right_total = gallery.right.size();
+  if (gallery.wrong.size() > max_wrong) gallery.wrong.resize(max_wrong);
+  if (gallery.right.size() > max_right) {
+    // Evenly spread, first and last included, so the sample covers the whole run.
+    std::vector<GalleryEntry> sample;
+    const std::size_t n = gallery.right.size();
+    for (std::size_t k = 0; k < max_right; ++k) {
+      const std::size_t i = max_right == 1 ? 0 : k * (n - 1) / (max_right - 1);
+      sample.push_back(gallery.right[i]);
+    }
+    gallery.right = std::move(sample);
+  }
+  return gallery;
+}
+
+ReportSummary writeReport(const ReportRequest& request) {
+  // Every refusal comes before DIR is touched.
+  requireReadableFile(request.map, "map");
+  requireReadableFile(request.log, "log");
+  requireReadableFile(request.gt, "ground truth");
+  requireWritableFolder(request.out);
+
+  storage::MapStore store(request.map.string(), storage::OpenMode::kReadOnly);
+  // The log names the session that wrote it: its thumbnails come from that session's frames.
+  const std::optional<std::int64_t> wanted =
+      request.session ? request.session : sessionOfLog(request.log);
+  std::optional<storage::SessionRecord> session;
+  for (auto& s : store.sessions())
+    if (!wanted || s.id == *wanted) session = s;
+  if (!session)
+    throw Error(
+        ErrorCode::kInvalidArgument,
+        wanted ? fmt::format("map {} has no session {}{}", request.map.string(), *wanted,
+                             request.session ? "" : " (the session of the log's rows)")
+               : fmt::format("map {} has no session: map a sequence first", request.map.string()));
+  std::map<std::int64_t, std::string> image_of;  // source index -> stored path
+  for (const auto& frame : store.frames(session->id))
+    image_of[frame.source_index] = frame.source_path;
+
+  ScratchFolder scratch;
+  EvalRequest eval;
+  eval.log = request.log;
+  eval.gt = request.gt;
+  eval.window = request.window;
+  eval.plots_dir = scratch.path();
+  eval.map_path = request.map.string();
+  eval.session = session->id;
+  const EvalOutcome outcome = runEvaluation(eval);
+  const GroundTruth gt = loadGroundTruth(request.gt);
+
+  ReportPage page;
+  page.map = request.map.string();
+  page.log = request.log.string();
+  page.gt = request.gt.string();
+  page.session = session->id;
+  page.figures = outcome.evaluation.figures;
+  for (const auto& plot : outcome.plots)
+    page.plots.push_back(
+        {plot.file, plot.what,
+         "data:image/png;base64," + base64Encode(readBytes(scratch.path() / plot.file))});
+
+  ReportSummary summary;
+  const Gallery gallery =
+      closureGallery(outcome.evaluation, gt, request.max_wrong, request.max_right);
+  page.wrong_total = gallery.wrong_total;
+  page.right_total = gallery.right_total;
+  std::map<std::int64_t, std::string> thumbnails;  // a frame matched often is encoded once
+  auto picture = [&](std::int64_t frame) -> ReportPage::Picture {
+    auto stored = image_of.find(frame);
+    ReportPage::Picture p{frame, stored == image_of.end() ? std::string() : stored->second, {}};
+    auto cached = thumbnails.find(frame);
+    if (cached == thumbnails.end())
+      cached = thumbnails.emplace(frame, thumbnail(locateImage(p.path, session->source))).first;
+    p.uri = cached->second;
+    if (p.uri.empty()) ++summary.missing_images;
+    return p;
+  };
+  for (const auto* entries : {&gallery.wrong, &gallery.right})
+    for (const auto& e : *entries) {
+      ReportPage::Pair pair{e, picture(e.frame), picture(e.matched)};
+      (e.right ? page.right : page.wrong).push_back(std::move(pair));
+    }
+
+  std::error_code ec;
+  fs::create_directories(request.out, ec);
+  if (ec)
+    throw Error(ErrorCode::kIo,
+                fmt::format("cannot create {}: {}", request.out.string(), ec.message()));
+  summary.page = request.out / "index.html";
+  writeWhole(summary.page, reportHtml(page));
+  summary.figures = page.plots.size();
+  summary.wrong_shown = page.wrong.size();
+  summary.right_shown = page.right.size();
+  return summary;
+}
+
+}  // namespace placedb::cli
