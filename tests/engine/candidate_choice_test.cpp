@@ -40,8 +40,8 @@ bool relaxed(const GeometricResult& g) { return g.inliers >= 7; }
 TEST(CandidateChoice, FirstPassEndsTheSearch) {
   FakeCheck check;
   check.results = {{10, result(9, false)}, {11, result(20, true)}, {12, result(40, true)}};
-  const CandidateChoice c = chooseCandidate({10, 11, 12}, {}, GeometryRule::kInliers, check.fn(),
-                                            relaxed);
+  const CandidateChoice c =
+      chooseCandidate({10, 11, 12}, {}, GeometryRule::kInliers, check.fn(), relaxed);
   EXPECT_EQ(c.location, 11);
   EXPECT_TRUE(c.passed);
   EXPECT_FALSE(c.temporal);
@@ -73,7 +73,9 @@ TEST(CandidateChoice, JumpThatPassesMeetsTheContinuationItSkipped) {
   // 11 passes first, but the closure was going on at 30-31: the continuation is checked and,
   // passing with as many inliers, kept.
   FakeCheck check;
-  check.results = {{10, result(9, false)}, {11, result(14, true)}, {30, result(14, true)},
+  check.results = {{10, result(9, false)},
+                   {11, result(14, true)},
+                   {30, result(14, true)},
                    {31, result(12, false)}};
   const CandidateChoice c =
       chooseCandidate({10, 11, 30, 31}, {30, 31}, GeometryRule::kInliers, check.fn(), relaxed);
