@@ -12,7 +12,7 @@
 // --closures writes one row per accepted closure with how the query's view relates to the
 // hypothesis frame that best matches it (footprint IoU, shared ground, heading, gap), so a
 // closure the ground truth calls false can be checked frame by frame; --show writes frames Q and
-// R of the same sequence side by side, to look at one.
+// R of the same sequence side by side, then R warped into Q's view, to look at one.
 //
 // Rows are printed as each window ends, so a run stopped early still leaves its figures.
 #include <fmt/format.h>
@@ -28,6 +28,7 @@
 #include <fstream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -252,9 +253,15 @@ int main(int argc, char** argv) {
     auto planned = Clock::now();
     placedb::synthetic::SyntheticSequence seq(synthetic);
     if (!flags.show_png.empty()) {
-      cv::Mat pair;
-      cv::hconcat(seq.render(flags.show_q), seq.render(flags.show_r), pair);
-      cv::imwrite(flags.show_png.string(), pair);
+      // The third panel is r drawn in q's camera with the exact homography of the ground: where
+      // it lines up with the first, the two frames show the same ground.
+      const cv::Mat q_image = seq.render(flags.show_q), r_image = seq.render(flags.show_r);
+      cv::Mat r_in_q;
+      cv::warpPerspective(r_image, r_in_q, cv::Mat(seq.homography(flags.show_r, flags.show_q)),
+                          q_image.size());
+      cv::Mat panels;
+      cv::hconcat(std::vector<cv::Mat>{q_image, r_image, r_in_q}, panels);
+      cv::imwrite(flags.show_png.string(), panels);
       auto rel = placedb::synthetic::relateViews(flags.show_q, seq.pose(flags.show_q), flags.show_r,
                                                  seq.pose(flags.show_r), seq.camera());
       fmt::print("{}: frames {} | {}, IoU {:.3f}, shared {:.3f}, heading {:.1f} deg, gap {}\n",
