@@ -199,5 +199,24 @@ TEST(GroundTruth, SharesGroundJudgesClosuresOnCommonGroundWhateverTheHeading) {
   EXPECT_FALSE(sharesGround(sliver, settings));
 }
 
+// The rule as the bench applies it to one closure is the rule the list was made with, and every
+// listed pair passes the closure judge: a closure onto a listed frame is never counted false.
+TEST(GroundTruth, IsRevisitAndSharesGroundAgreeWithTheList) {
+  const SyntheticSequence sequence(demoOptions(400, 5));
+  const GroundTruthSettings settings;
+  std::vector<std::pair<int, int>> listed;
+  for (int q = 0; q < sequence.size(); ++q) {
+    for (int r = 0; r < q; ++r) {
+      const ViewRelation v =
+          relateViews(q, sequence.pose(q), r, sequence.pose(r), sequence.camera());
+      if (!isRevisit(v, settings)) continue;
+      listed.emplace_back(q, r);
+      EXPECT_TRUE(sharesGround(v, settings)) << q << " " << r;
+    }
+  }
+  ASSERT_FALSE(listed.empty());
+  EXPECT_EQ(listed, sequence.groundTruth());
+}
+
 }  // namespace
 }  // namespace placedb::synthetic
