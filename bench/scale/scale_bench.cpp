@@ -6,9 +6,17 @@
 //
 //   placedb_scale_bench [--frames N] [--wm-max M] [--window W] [--map PATH] [--seed S]
 //                       [--width W] [--height H] [--queries Q] [--set key=value]...
+//                       [--closures CSV]
+//   placedb_scale_bench --frames N [--seed S] [--width W] [--height H] --show Q R PNG
+//
+// --closures writes one row per accepted closure with how the query's view relates to the
+// hypothesis frame that best matches it (footprint IoU, shared ground, heading, gap), so a
+// closure the ground truth calls false can be checked frame by frame; --show writes frames Q and
+// R of the same sequence side by side, then R warped into Q's view, to look at one.
 //
 // Rows are printed as each window ends, so a run stopped early still leaves its figures.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -19,12 +27,16 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "placedb/map.h"
 #include "placedb/storage/map_files.h"
 #include "placedb/storage/map_store.h"
+#include "synthetic/ground_truth.h"
 #include "synthetic/synthetic_sequence.h"
 
 namespace fs = std::filesystem;
@@ -41,6 +53,9 @@ struct Flags {
   int width = 320, height = 240;
   std::uint64_t seed = 1;
   fs::path map = fs::temp_directory_path() / "placedb-scale-bench.placedb";
+  fs::path closures;  // CSV of accepted closures, when set
+  int show_q = -1, show_r = -1;
+  fs::path show_png;
   std::map<std::string, std::string> settings;
 };
 
@@ -92,6 +107,14 @@ Flags parseFlags(int argc, char** argv) {
       ++i;
       continue;
     }
+    if (flag == "--show") {
+      if (i + 3 >= argc) throw std::invalid_argument(flag + " needs Q R PNG");
+      f.show_q = std::stoi(argv[i + 1]);
+      f.show_r = std::stoi(argv[i + 2]);
+      f.show_png = argv[i + 3];
+      i += 3;
+      continue;
+    }
     if (i + 1 >= argc) throw std::invalid_argument(flag + " needs a value");
     std::string value = argv[++i];
     if (flag == "--frames")
@@ -110,6 +133,8 @@ Flags parseFlags(int argc, char** argv) {
       f.seed = std::stoull(value);
     else if (flag == "--map")
       f.map = value;
+    else if (flag == "--closures")
+      f.closures = value;
     else if (flag == "--set")
       f.settings[value.substr(0, value.find('='))] = value.substr(value.find('=') + 1);
     else
@@ -120,14 +145,53 @@ Flags parseFlags(int argc, char** argv) {
   return f;
 }
 
-// True when the accepted hypothesis covers a frame that q truly revisits.
-bool acceptedIsTrue(const placedb::synthetic::SyntheticSequence& seq, int q,
-                    const placedb::FrameResult& r) {
-  auto truth = seq.revisitsOf(q);
-  for (const auto& f : r.hypothesis.frames)
-    if (std::binary_search(truth.begin(), truth.end(), static_cast<int>(f.source_index)))
-      return true;
-  return false;
+// The hypothesis frame that best explains an accepted closure of frame q: one the ground truth
+// lists if there is one, else one that shares ground with q (the judge of an accepted closure,
+// see sharesGround()), else the one sharing the most.
+struct ClosureView {
+  int r = -1;
+  placedb::synthetic::ViewRelation relation;
+  bool listed = false;  // (q, r) is in the ground truth's revisit list
+  bool same = false;    // q and r show the same ground: the closure is right
+};
+
+placedb::synthetic::GroundTruthSettings truthSettings(
+    const placedb::synthetic::SyntheticOptions& o) {
+  placedb::synthetic::GroundTruthSettings settings;
+  settings.min_gap = o.min_revisit_gap;
+  settings.min_overlap = o.gt_min_overlap;
+  settings.max_heading = o.gt_max_heading_degrees * CV_PI / 180.0;
+  return settings;
+}
+
+ClosureView bestView(const placedb::synthetic::SyntheticSequence& seq, int q,
+                     const placedb::FrameResult& result) {
+  const auto settings = truthSettings(seq.options());
+  const auto truth = seq.revisitsOf(q);
+  ClosureView best;
+  for (const auto& f : result.hypothesis.frames) {
+    const int r = static_cast<int>(f.source_index);
+    if (r < 0 || r >= seq.size()) continue;
+    ClosureView v;
+    v.r = r;
+    v.relation = placedb::synthetic::relateViews(q, seq.pose(q), r, seq.pose(r), seq.camera());
+    v.listed = std::binary_search(truth.begin(), truth.end(), r);
+    v.same = placedb::synthetic::sharesGround(v.relation, settings);
+    if (best.r < 0 || std::make_tuple(v.listed, v.same, v.relation.shared) >
+                          std::make_tuple(best.listed, best.same, best.relation.shared))
+      best = v;
+  }
+  return best;
+}
+
+void writeClosure(std::FILE* out, int q, const placedb::FrameResult& result, const ClosureView& v) {
+  std::vector<std::int64_t> frames;
+  for (const auto& f : result.hypothesis.frames) frames.push_back(f.source_index);
+  fmt::print(out, "{},{},{},{},{},{},{:.3f},{:.3f},{:.1f},{},{},{},{},{:.1f},{:.3f}\n", q,
+             result.hypothesis.location_id, frames.size(), fmt::join(frames, ";"), v.r,
+             v.relation.gap, v.relation.iou, v.relation.shared, v.relation.heading * 180 / CV_PI,
+             int(v.listed), int(v.same), result.hypothesis.inliers, result.hypothesis.matches,
+             result.hypothesis.log10_nfa, result.hypothesis.posterior);
 }
 
 struct QueryFigures {
@@ -188,6 +252,31 @@ int main(int argc, char** argv) {
     synthetic.height = flags.height;
     auto planned = Clock::now();
     placedb::synthetic::SyntheticSequence seq(synthetic);
+    if (!flags.show_png.empty()) {
+      // The third panel is r drawn in q's camera with the exact homography of the ground: where
+      // it lines up with the first, the two frames show the same ground.
+      const cv::Mat q_image = seq.render(flags.show_q), r_image = seq.render(flags.show_r);
+      cv::Mat r_in_q;
+      cv::warpPerspective(r_image, r_in_q, cv::Mat(seq.homography(flags.show_r, flags.show_q)),
+                          q_image.size());
+      cv::Mat panels;
+      cv::hconcat(std::vector<cv::Mat>{q_image, r_image, r_in_q}, panels);
+      cv::imwrite(flags.show_png.string(), panels);
+      auto rel = placedb::synthetic::relateViews(flags.show_q, seq.pose(flags.show_q), flags.show_r,
+                                                 seq.pose(flags.show_r), seq.camera());
+      fmt::print("{}: frames {} | {}, IoU {:.3f}, shared {:.3f}, heading {:.1f} deg, gap {}\n",
+                 flags.show_png.string(), flags.show_q, flags.show_r, rel.iou, rel.shared,
+                 rel.heading * 180 / CV_PI, rel.gap);
+      return 0;
+    }
+    std::FILE* closures = nullptr;
+    if (!flags.closures.empty()) {
+      closures = std::fopen(flags.closures.c_str(), "w");
+      if (!closures) throw std::runtime_error("cannot write " + flags.closures.string());
+      fmt::print(closures,
+                 "q,location,n_frames,frames,r,gap,iou,shared,heading_deg,listed,same,inliers,"
+                 "matches,log10_nfa,posterior\n");
+    }
     fmt::print(
         "scale profile: {} frames {}x{}, seed {}, {} revisiting frames (first at {}), "
         "planned in {:.1f} s\n",
@@ -196,16 +285,17 @@ int main(int argc, char** argv) {
     fmt::print("settings: wm_max={} (others default{}), map {}\n", flags.wm_max,
                flags.settings.empty() ? "" : " except --set", flags.map.string());
     fmt::print(
-        "{:>7} {:>8} {:>8} {:>8} {:>6} {:>7} {:>8} {:>8} {:>9} {:>9} {:>9} {:>8} {:>6} {:>6}\n",
+        "{:>7} {:>8} {:>8} {:>8} {:>6} {:>7} {:>8} {:>8} {:>9} {:>9} {:>9} {:>8} {:>6} {:>6} "
+        "{:>6}\n",
         "frames", "p50 ms", "p99 ms", "max ms", "wm", "ltm", "peakRSS", "curRSS", "B/locatn",
-        "reopen ms", "query ms", "q found", "loops", "true");
+        "reopen ms", "query ms", "q found", "loops", "true", "listed");
     std::fflush(stdout);
 
     removeMap(flags.map);
     auto map = placedb::Map::open(flags.map.string(), options);
     map->beginSession("synthetic scale");
     std::vector<double> window_times;
-    int accepted = 0, accepted_true = 0;
+    int accepted = 0, accepted_true = 0, accepted_listed = 0;
     std::int64_t locations = 0;
     for (int i = 0; i < seq.size(); ++i) {
       cv::Mat image = seq.render(i);
@@ -215,7 +305,10 @@ int main(int argc, char** argv) {
       locations = std::max(locations, r.location_id);
       if (r.hypothesis.accepted) {
         ++accepted;
-        accepted_true += acceptedIsTrue(seq, i, r);
+        const ClosureView v = bestView(seq, i, r);
+        accepted_true += v.same;
+        accepted_listed += v.listed;
+        if (closures) writeClosure(closures, i, r, v);
       }
       const bool window_end = (i + 1) % flags.window == 0 || i + 1 == seq.size();
       if (!window_end) continue;
@@ -231,20 +324,23 @@ int main(int argc, char** argv) {
       std::int64_t ltm = locations - static_cast<std::int64_t>(r.wm_size + r.stm_size);
       fmt::print(
           "{:>7} {:>8.2f} {:>8.2f} {:>8.1f} {:>6} {:>7} {:>7.0f}M {:>7.0f}M {:>9.0f} "
-          "{:>9.1f} {:>9.1f} {:>5}/{:<2} {:>6} {:>6}\n",
+          "{:>9.1f} {:>9.1f} {:>5}/{:<2} {:>6} {:>6} {:>6}\n",
           i + 1, percentile(window_times, 50), percentile(window_times, 99),
           *std::max_element(window_times.begin(), window_times.end()), r.wm_size, ltm, peakRssMiB(),
           currentRssMiB(), double(mapBytes(flags.map)) / std::max<std::int64_t>(1, locations),
-          reopen_ms, q.p50, q.found, q.asked, accepted, accepted_true);
+          reopen_ms, q.p50, q.found, q.asked, accepted, accepted_true, accepted_listed);
       std::fflush(stdout);
       window_times.clear();
+      if (closures) std::fflush(closures);
     }
     map->close();
+    if (closures) std::fclose(closures);
     fmt::print(
         "done: {} frames, {} locations, map {:.1f} MiB; accepted loop closures {} "
-        "({} true, precision {:.3f})\n",
+        "({} true, precision {:.3f}; {} in the revisit list, {:.3f})\n",
         seq.size(), locations, mapBytes(flags.map) / 1048576.0, accepted, accepted_true,
-        accepted ? double(accepted_true) / accepted : 1.0);
+        accepted ? double(accepted_true) / accepted : 1.0, accepted_listed,
+        accepted ? double(accepted_listed) / accepted : 1.0);
     return 0;
   } catch (const std::exception& e) {
     fmt::print(stderr, "error: {}\n", e.what());

@@ -112,5 +112,111 @@ TEST(GroundTruth, RevisitsOfAgreesWithThePairList) {
   EXPECT_EQ(total, sequence.groundTruth().size());
 }
 
+// Poses of the scale profile's camera (6 m up, 60 degrees below the horizon, 60 degree field).
+Pose groundPose(double x, double y, double heading_degrees) {
+  Pose pose;
+  pose.x = x;
+  pose.y = y;
+  pose.heading = heading_degrees * CV_PI / 180.0;
+  pose.height = 6.0;
+  pose.pitch = 60.0 * CV_PI / 180.0;
+  return pose;
+}
+
+TEST(GroundTruth, RelateViewsMeasuresWhatTheRuleIsStatedIn) {
+  const auto camera = CameraIntrinsics::fromHorizontalFov(160, 120, 60.0 * CV_PI / 180.0);
+  const GroundTruthSettings settings;
+
+  const ViewRelation same =
+      relateViews(120, groundPose(5, 5, 30), 20, groundPose(5, 5, 30), camera);
+  EXPECT_EQ(same.gap, 100);
+  EXPECT_NEAR(same.iou, 1.0, 1e-6);
+  EXPECT_NEAR(same.shared, 1.0, 1e-6);
+  EXPECT_NEAR(same.heading, 0.0, 1e-12);
+  EXPECT_TRUE(isRevisit(same, settings));
+  // The same view, too soon after: neighbours in time are not loops.
+  EXPECT_FALSE(
+      isRevisit(relateViews(69, groundPose(5, 5, 30), 20, groundPose(5, 5, 30), camera), settings));
+
+  // Headings wrap: 350 and 10 degrees are 20 apart.
+  const ViewRelation wrapped =
+      relateViews(100, groundPose(0, 0, 350), 0, groundPose(0, 0, 10), camera);
+  EXPECT_NEAR(wrapped.heading * 180 / CV_PI, 20.0, 1e-9);
+  EXPECT_TRUE(isRevisit(wrapped, settings) == (wrapped.iou >= settings.min_overlap));
+  // Turned 40 degrees on the spot: the views share ground but the rule's heading bound fails.
+  const ViewRelation turned =
+      relateViews(100, groundPose(0, 0, 40), 0, groundPose(0, 0, 0), camera);
+  EXPECT_GT(turned.shared, 0.0);
+  EXPECT_FALSE(isRevisit(turned, settings));
+
+  // Driving on along the street: the shared ground falls, and the shared fraction of the smaller
+  // footprint is never below the IoU.
+  double last_shared = 2;
+  for (double ahead = 0; ahead <= 30; ahead += 2) {
+    const ViewRelation moved =
+        relateViews(100, groundPose(ahead, 0, 0), 0, groundPose(0, 0, 0), camera);
+    EXPECT_GE(moved.shared + 1e-6, moved.iou);  // float clipping
+    EXPECT_LE(moved.shared, last_shared + 1e-9);
+    last_shared = moved.shared;
+  }
+  EXPECT_EQ(last_shared, 0.0);  // 30 m on, the two footprints are disjoint
+}
+
+// The judge of an accepted closure: common ground, any heading. Driving a street the other way
+// sees the same ground rotated half a turn; the revisit rule does not list it, the judge accepts
+// a closure onto it.
+TEST(GroundTruth, SharesGroundJudgesClosuresOnCommonGroundWhateverTheHeading) {
+  const auto camera = CameraIntrinsics::fromHorizontalFov(160, 120, 60.0 * CV_PI / 180.0);
+  const GroundTruthSettings settings;
+  const Pose outward = groundPose(0, 0, 0);
+  // The footprint of a camera 6 m up at 60 degrees runs from ~0.7 m to ~8 m ahead, so a camera
+  // 8.7 m on looking back sees the same stretch of street.
+  const ViewRelation back = relateViews(500, groundPose(8.7, 0, 180), 100, outward, camera);
+  EXPECT_NEAR(back.heading * 180 / CV_PI, 180.0, 1e-9);
+  EXPECT_GT(back.shared, 0.5);
+  EXPECT_FALSE(isRevisit(back, settings));
+  EXPECT_TRUE(sharesGround(back, settings));
+  // The same views 49 frames apart: the recent past is not a loop, for either rule.
+  EXPECT_FALSE(
+      sharesGround(relateViews(149, groundPose(8.7, 0, 180), 100, outward, camera), settings));
+  // Side by side across a crossing, turned a quarter: still common ground.
+  const ViewRelation crossing = relateViews(500, groundPose(4, -4, 90), 100, outward, camera);
+  EXPECT_GE(crossing.shared, settings.min_shared);
+  EXPECT_TRUE(sharesGround(crossing, settings));
+  // Every revisit shares ground (IoU >= 0.5 implies shared >= 0.5).
+  const ViewRelation alike = relateViews(500, groundPose(1, 0.5, 10), 100, outward, camera);
+  EXPECT_TRUE(isRevisit(alike, settings));
+  EXPECT_TRUE(sharesGround(alike, settings));
+  // Looking away from each other, or a street apart: nothing in common, a false closure.
+  EXPECT_FALSE(
+      sharesGround(relateViews(500, groundPose(0, 0, 180), 100, outward, camera), settings));
+  EXPECT_FALSE(
+      sharesGround(relateViews(500, groundPose(0, 20, 0), 100, outward, camera), settings));
+  // A sliver of common ground is not enough: the bound is on the smaller footprint's share.
+  const ViewRelation sliver = relateViews(500, groundPose(7, 0, 0), 100, outward, camera);
+  EXPECT_GT(sliver.shared, 0.0);
+  EXPECT_LT(sliver.shared, settings.min_shared);
+  EXPECT_FALSE(sharesGround(sliver, settings));
+}
+
+// The rule as the bench applies it to one closure is the rule the list was made with, and every
+// listed pair passes the closure judge: a closure onto a listed frame is never counted false.
+TEST(GroundTruth, IsRevisitAndSharesGroundAgreeWithTheList) {
+  const SyntheticSequence sequence(demoOptions(400, 5));
+  const GroundTruthSettings settings;
+  std::vector<std::pair<int, int>> listed;
+  for (int q = 0; q < sequence.size(); ++q) {
+    for (int r = 0; r < q; ++r) {
+      const ViewRelation v =
+          relateViews(q, sequence.pose(q), r, sequence.pose(r), sequence.camera());
+      if (!isRevisit(v, settings)) continue;
+      listed.emplace_back(q, r);
+      EXPECT_TRUE(sharesGround(v, settings)) << q << " " << r;
+    }
+  }
+  ASSERT_FALSE(listed.empty());
+  EXPECT_EQ(listed, sequence.groundTruth());
+}
+
 }  // namespace
 }  // namespace placedb::synthetic

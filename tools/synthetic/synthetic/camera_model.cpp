@@ -1,5 +1,6 @@
 #include "synthetic/camera_model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -68,7 +69,8 @@ double polygonArea(const std::array<cv::Point2d, 4>& quad) {
   return 0.5 * std::abs(twice);
 }
 
-double footprintOverlap(const std::array<cv::Point2d, 4>& a, const std::array<cv::Point2d, 4>& b) {
+double footprintIntersection(const std::array<cv::Point2d, 4>& a,
+                             const std::array<cv::Point2d, 4>& b) {
   // Work relative to a's first corner so float precision holds far from the origin.
   const cv::Point2d origin = a[0];
   std::vector<cv::Point2f> pa, pb;
@@ -78,6 +80,11 @@ double footprintOverlap(const std::array<cv::Point2d, 4>& a, const std::array<cv
   }
   std::vector<cv::Point2f> shared;
   const double inter = cv::intersectConvexConvex(pa, pb, shared, true);
+  return std::max(inter, 0.0);
+}
+
+double footprintOverlap(const std::array<cv::Point2d, 4>& a, const std::array<cv::Point2d, 4>& b) {
+  const double inter = footprintIntersection(a, b);
   if (inter <= 0) return 0;
   const double uni = polygonArea(a) + polygonArea(b) - inter;
   return uni > 0 ? inter / uni : 0;

@@ -36,6 +36,10 @@ std::array<cv::Point2d, 4> groundFootprint(const Pose& pose, const CameraIntrins
 
 double polygonArea(const std::array<cv::Point2d, 4>& quad);
 
+// Area of ground two footprints share (square metres).
+double footprintIntersection(const std::array<cv::Point2d, 4>& a,
+                             const std::array<cv::Point2d, 4>& b);
+
 // Area shared by two footprints over the area of their union (intersection over union).
 double footprintOverlap(const std::array<cv::Point2d, 4>& a, const std::array<cv::Point2d, 4>& b);
 

@@ -13,12 +13,36 @@ std::uint64_t cellKey(std::int64_t cx, std::int64_t cy) {
   return (static_cast<std::uint64_t>(cx) << 32) ^ static_cast<std::uint64_t>(cy & 0xffffffff);
 }
 
+}  // namespace
+
 double headingDifference(double a, double b) {
   const double d = std::remainder(a - b, 2 * CV_PI);
   return std::abs(d);
 }
 
-}  // namespace
+ViewRelation relateViews(int q, const Pose& q_pose, int r, const Pose& r_pose,
+                         const CameraIntrinsics& camera) {
+  const auto a = groundFootprint(q_pose, camera);
+  const auto b = groundFootprint(r_pose, camera);
+  ViewRelation out;
+  out.gap = q - r;
+  out.heading = headingDifference(q_pose.heading, r_pose.heading);
+  const double inter = footprintIntersection(a, b);
+  const double area_a = polygonArea(a), area_b = polygonArea(b);
+  const double uni = area_a + area_b - inter;
+  out.iou = uni > 0 ? inter / uni : 0;
+  out.shared = std::min(area_a, area_b) > 0 ? inter / std::min(area_a, area_b) : 0;
+  return out;
+}
+
+bool isRevisit(const ViewRelation& relation, const GroundTruthSettings& settings) {
+  return relation.gap >= settings.min_gap && relation.heading <= settings.max_heading &&
+         relation.iou >= settings.min_overlap;
+}
+
+bool sharesGround(const ViewRelation& relation, const GroundTruthSettings& settings) {
+  return relation.gap >= settings.min_gap && relation.shared >= settings.min_shared;
+}
 
 std::vector<std::pair<int, int>> computeRevisits(const std::vector<Pose>& poses,
                                                  const CameraIntrinsics& camera,
