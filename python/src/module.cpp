@@ -183,7 +183,21 @@ void bindResults(py::module_& m) {
       .def_readonly("accepted", &Hypothesis::accepted)
       .def_readonly("rejected_reason", &Hypothesis::rejected_reason)
       .def_readonly("inliers", &Hypothesis::inliers, "geometric check inliers, 0: no check")
-      .def_readonly("matches", &Hypothesis::matches);
+      .def_readonly("matches", &Hypothesis::matches)
+      .def_property_readonly(
+          "pose",
+          [](const Hypothesis& h) -> py::object {
+            if (!h.pose) return py::none();
+            const auto& p = *h.pose;
+            py::dict d;
+            d["rotation"] = py::make_tuple(p.qw, p.qx, p.qy, p.qz);
+            d["translation"] = py::make_tuple(p.tx, p.ty, p.tz);
+            d["inliers"] = p.inliers;
+            return std::move(d);
+          },
+          "an accepted closure's relative pose when the map has intrinsics (fx fy cx cy): "
+          "{'rotation': (qw, qx, qy, qz), 'translation': unit (tx, ty, tz), 'inliers': n}; "
+          "None otherwise");
   py::class_<StageTimes>(m, "StageTimes", "Milliseconds per stage")
       .def_readonly("features", &StageTimes::features)
       .def_readonly("quantisation", &StageTimes::quantisation)

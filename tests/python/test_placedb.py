@@ -72,6 +72,27 @@ def test_revisited_views_close_loops_that_loop_closures_lists(tmp_path):
         assert m.loop_closures() == rows
 
 
+def test_closures_carry_a_pose_only_with_intrinsics(tmp_path):
+    camera = {"fx": 300.0, "fy": 300.0, "cx": 160.0, "cy": 120.0}
+    for settings, posed in ((None, False), (camera, True)):
+        path = str(tmp_path / f"pose-{posed}.placedb")
+        with placedb.Map(path, settings=settings) as m:
+            m.begin_session("tour")
+            results = [m.process(scene(seed)) for seed in list(range(24)) + list(range(8))]
+        accepted = [r for r in results if r.accepted]
+        assert accepted
+        poses = [r.hypothesis.pose for r in accepted]
+        if not posed:
+            assert all(p is None for p in poses)
+            continue
+        assert any(p is not None for p in poses), [repr(r) for r in accepted]
+        for p in poses:
+            if p is None:
+                continue
+            assert abs(sum(q * q for q in p["rotation"]) - 1.0) < 1e-6
+            assert p["inliers"] >= 5
+
+
 def test_vocabulary_export_and_import_both_formats(tmp_path):
     path = str(tmp_path / "words.placedb")
     with placedb.Map(path) as m:
