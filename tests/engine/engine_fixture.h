@@ -47,6 +47,20 @@ inline const Sequence* rtabmapSamples() {
 
 inline void removeMap(const std::filesystem::path& p) { storage::removeMap(p.string()); }
 
+// A test over rtabmap_samples (skipped where the data set is absent) with a map path of its own
+// in a fresh scratch folder.
+class SamplesMapTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    seq_ = rtabmapSamples();
+    if (!seq_) GTEST_SKIP() << "no rtabmap_samples under " << datasetsDir();
+    path_ =
+        scratchDir(::testing::UnitTest::GetInstance()->current_test_info()->name()) / "map.placedb";
+  }
+  const Sequence* seq_ = nullptr;
+  std::filesystem::path path_;
+};
+
 inline MapImpl& impl(Map& map) { return dynamic_cast<MapImpl&>(map); }
 
 // The first column of the first row of `sql` on the map, read-only; -1 when there is no row.

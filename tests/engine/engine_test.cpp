@@ -12,17 +12,7 @@
 namespace placedb::testing {
 namespace {
 
-class EngineTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    seq_ = rtabmapSamples();
-    if (!seq_) GTEST_SKIP() << "no rtabmap_samples under " << datasetsDir();
-    path_ =
-        scratchDir(::testing::UnitTest::GetInstance()->current_test_info()->name()) / "map.placedb";
-  }
-  const Sequence* seq_ = nullptr;
-  std::filesystem::path path_;
-};
+class EngineTest : public SamplesMapTest {};
 
 TEST_F(EngineTest, SameImageTwiceMergesIntoOneLocation) {
   auto map = Map::open(path_.string(), Options());

@@ -17,15 +17,8 @@
 namespace placedb::testing {
 namespace {
 
-class LtmSearchTest : public ::testing::Test {
+class LtmSearchTest : public SamplesMapTest {
  protected:
-  void SetUp() override {
-    seq_ = rtabmapSamples();
-    if (!seq_) GTEST_SKIP() << "no rtabmap_samples under " << datasetsDir();
-    path_ =
-        scratchDir(::testing::UnitTest::GetInstance()->current_test_info()->name()) / "map.placedb";
-    removeMap(path_);
-  }
   // Maps the first `frames` frames with a small working memory, so that the early places end
   // in LTM.
   void mapFirst(std::size_t frames, const Options& options) {
@@ -38,8 +31,6 @@ class LtmSearchTest : public ::testing::Test {
       if (std::llabs(f.source_index - frame) <= tolerance) return true;
     return false;
   }
-  const Sequence* seq_ = nullptr;
-  std::filesystem::path path_;
 };
 
 TEST_F(LtmSearchTest, QueryFindsPlacesThatMovedToLongTermMemory) {
