@@ -103,9 +103,7 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
         const GeometricResult g = checkGeometry(view, viewOf(keypoints), geometry);
         QueryMatch& match = candidates[id];
         // Eq. 5 from the stored words, so that locations of every tier compare alike.
-        match.similarity =
-            similarity(signature, Signature::fromWords(std::vector<WordId>(keypoints.words.begin(),
-                                                                           keypoints.words.end())));
+        match.similarity = similarity(signature, Signature::fromWords(keypoints.words));
         match.inliers = g.inliers;
         match.verified = g.passed;
         ++result.checked;
@@ -137,8 +135,6 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
         match.location_id = id;
         match.tier = tiers_->contains(id) ? tiers_->tierOf(id) : Tier::kLtm;
         if (!code.empty()) match.code_similarity = places_.similarity(code, id);
-        for (const auto& s : sims)
-          if (s.location == id) match.similarity = s.similarity;
       }
       check(around);
     }
