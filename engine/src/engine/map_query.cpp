@@ -4,13 +4,14 @@
 // Candidates come from two searches: the bag-of-words similarity (eq. 5) over the locations in
 // RAM (STM and WM), and the place codes over every location, LTM included. Each candidate goes
 // through the mapping's geometric check against its own stored keypoints, and so do the
-// locations within two links of the best one that passes; the verdict is "known"
-// when the best candidate passes it (the mapping's geometry rule), "unknown" when none does. A
+// locations within two links of the best one that passes (again around a neighbour that beats
+// it, until the best stays the same); the verdict is "known" when the best candidate passes it (the mapping's geometry rule), "unknown" when none does. A
 // place never seen still finds look-alike candidates, but their matches do not agree on one
 // epipolar geometry, so it is reported unknown instead of as its nearest look-alike.
 #include <algorithm>
 #include <chrono>
 #include <map>
+#include <set>
 
 #include "engine/map_impl.h"
 #include "engine/option_mapping.h"
@@ -112,10 +113,13 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
     check(ids);
     // The searches rank whole images; the best verified place's graph neighbours (any tier)
     // often see the query's viewpoint better still, as the filter's neighbours do in mapping.
-    const QueryMatch* best = nullptr;
-    for (const auto& [id, match] : candidates)
-      if (match.verified && (!best || match.inliers > best->inliers)) best = &match;
-    if (best) {
+    // Climbs: when a neighbour beats the best, its own neighbourhood is checked in turn.
+    std::set<LocationId> expanded;
+    for (;;) {
+      const QueryMatch* best = nullptr;
+      for (const auto& [id, match] : candidates)
+        if (match.verified && (!best || match.inliers > best->inliers)) best = &match;
+      if (!best || !expanded.insert(best->location_id).second) break;
       std::vector<LocationId> around;
       std::vector<LocationId> frontier{best->location_id};
       for (int depth = 0; depth < kNeighbourDepth; ++depth) {
