@@ -8,6 +8,8 @@
 //                       [--width W] [--height H] [--queries Q] [--set key=value]...
 //                       [--closures CSV]
 //   placedb_scale_bench --frames N [--seed S] [--width W] [--height H] --show Q R PNG
+//   placedb_scale_bench --frames N [--width W] [--height H] [--queries Q] [--mapped M]
+//                       --query-only MAP
 //
 // --closures writes one row per accepted closure with how the query's view relates to the
 // hypothesis frame that best matches it (footprint IoU, shared ground, heading, gap), so a
@@ -50,6 +52,8 @@ struct Flags {
   int window = 5000;
   int queries = 10;
   bool reopen_only = false;  // time Map::open + resumeSession on an existing map, then stop
+  bool query_only = false;   // query an existing map made with the same --frames, then stop
+  int mapped = 0;            // --query-only: frames the map holds (0: --frames)
   int width = 320, height = 240;
   std::uint64_t seed = 1;
   fs::path map = fs::temp_directory_path() / "placedb-scale-bench.placedb";
@@ -107,6 +111,13 @@ Flags parseFlags(int argc, char** argv) {
       ++i;
       continue;
     }
+    if (flag == "--query-only") {
+      if (i + 1 >= argc) throw std::invalid_argument(flag + " needs a map");
+      f.map = argv[i + 1];
+      f.query_only = true;
+      ++i;
+      continue;
+    }
     if (flag == "--show") {
       if (i + 3 >= argc) throw std::invalid_argument(flag + " needs Q R PNG");
       f.show_q = std::stoi(argv[i + 1]);
@@ -125,6 +136,8 @@ Flags parseFlags(int argc, char** argv) {
       f.window = std::stoi(value);
     else if (flag == "--queries")
       f.queries = std::stoi(value);
+    else if (flag == "--mapped")
+      f.mapped = std::stoi(value);
     else if (flag == "--width")
       f.width = std::stoi(value);
     else if (flag == "--height")
@@ -199,10 +212,24 @@ struct QueryFigures {
   int found = 0, asked = 0;
 };
 
+// A query's answer frame r is right for frame i when it lies within 2 frames of i or the ground
+// truth pairs the two as a revisit (either way round): a revisited place is held by the
+// locations of each of its visits, and any of them answers where the camera is.
+bool coversFrame(const placedb::synthetic::SyntheticSequence& seq, int i, int r) {
+  if (std::abs(r - i) <= 2) return true;
+  if (r < 0 || r >= seq.size()) return false;
+  const int q = std::max(i, r), older = std::min(i, r);
+  return placedb::synthetic::isRevisit(
+      placedb::synthetic::relateViews(q, seq.pose(q), older, seq.pose(older), seq.camera()),
+      truthSettings(seq.options()));
+}
+
 // Localisation on the map as it stands: a read-only Map beside the writer, querying frames that
-// were mapped (spread over the whole run), counting those whose best match covers the frame.
+// were mapped (spread over the whole run), counting those whose best match covers the frame
+// (coversFrame()).
 QueryFigures measureQueries(const Flags& flags, const placedb::Options& options,
-                            const placedb::synthetic::SyntheticSequence& seq, int mapped) {
+                            const placedb::synthetic::SyntheticSequence& seq, int mapped,
+                            bool verbose = false) {
   QueryFigures out;
   if (flags.queries <= 0) return out;
   auto reader = placedb::Map::open(flags.map.string(), options, placedb::Map::Mode::kLocalisation);
@@ -213,12 +240,23 @@ QueryFigures measureQueries(const Flags& flags, const placedb::Options& options,
     auto result = reader->query(seq.render(i), 1);
     times.push_back(msBetween(start, Clock::now()));
     ++out.asked;
+    bool found = false;
     if (!result.matches.empty())
       for (const auto& f : result.matches[0].frames)
-        if (std::abs(f.source_index - i) <= 2) {
-          ++out.found;
-          break;
-        }
+        if (coversFrame(seq, i, static_cast<int>(f.source_index))) found = true;
+    out.found += found;
+    if (verbose) {
+      std::string best = "none";
+      if (!result.matches.empty()) {
+        const auto& m = result.matches[0];
+        best = fmt::format("location {} ({}, {} inliers), frames", m.location_id,
+                           m.tier == placedb::Tier::kLtm ? "ltm" : "ram", m.inliers);
+        for (const auto& f : m.frames) best += " " + std::to_string(f.source_index);
+      }
+      fmt::print("frame {:>6}: {:>7.1f} ms, {} searched, {} checked, {}: {}{}\n", i, times.back(),
+                 result.searched, result.checked, placedb::toString(result.verdict), best,
+                 found ? "" : "  (not found)");
+    }
   }
   out.p50 = percentile(times, 50);
   out.max = *std::max_element(times.begin(), times.end());
@@ -252,6 +290,13 @@ int main(int argc, char** argv) {
     synthetic.height = flags.height;
     auto planned = Clock::now();
     placedb::synthetic::SyntheticSequence seq(synthetic);
+    if (flags.query_only) {
+      const QueryFigures q =
+          measureQueries(flags, options, seq, flags.mapped > 0 ? flags.mapped : seq.size(), true);
+      fmt::print("{}: {} of {} found, query p50 {:.1f} ms, max {:.1f} ms\n", flags.map.string(),
+                 q.found, q.asked, q.p50, q.max);
+      return 0;
+    }
     if (!flags.show_png.empty()) {
       // The third panel is r drawn in q's camera with the exact homography of the ground: where
       // it lines up with the first, the two frames show the same ground.
