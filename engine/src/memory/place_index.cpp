@@ -62,11 +62,14 @@ std::vector<PlaceMatch> PlaceIndex::search(const std::vector<std::int8_t>& code,
   if (query_norm == 0) return best;
   best.reserve(k + 1);
   for (std::size_t row = 0; row < ids_.size(); ++row) {
-    if (norms_[row] == 0 || !admit(ids_[row])) continue;
+    if (norms_[row] == 0) continue;
     const std::int8_t* stored = codes_.data() + row * dim_;
     const PlaceMatch m{ids_[row],
                        double(codeDot(stored, code.data(), dim_)) / (norms_[row] * query_norm)};
     if (best.size() == k && !better(m, best.back())) continue;
+    // Asked only of the few rows that would enter the k best: on a large map the caller's test
+    // (a tier lookup) costs more than the dot product.
+    if (!admit(ids_[row])) continue;
     best.insert(std::upper_bound(best.begin(), best.end(), m, better), m);
     if (best.size() > k) best.pop_back();
   }
