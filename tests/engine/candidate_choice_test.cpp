@@ -1,6 +1,6 @@
-// Which candidate a frame's hypothesis names: the first that passes ends the search, a near
-// continuation passes relaxed when nothing else does, and a jump away from the ongoing closure
-// has to beat its continuation.
+// Which candidates a frame's check sees and in what order, and which one its hypothesis names:
+// the first that passes ends the search, a near continuation passes relaxed when nothing else
+// does, and a jump away from the ongoing closure has to beat its continuation.
 #include <gtest/gtest.h>
 
 #include <map>
@@ -36,6 +36,46 @@ struct FakeCheck {
 };
 
 bool relaxed(const GeometricResult& g) { return g.inliers >= 7; }
+
+TEST(CandidateOrder, HypothesisFirstThenEverySourceOnceBySimilarity) {
+  CandidateSources s;
+  s.hypothesis = 10;
+  s.around = {11, 12};
+  s.most_similar = {30, 11};
+  s.searched_back = {40};
+  s.near_last_closure = {12, 50};
+  const std::map<LocationId, double> eq5{{10, 0.1}, {11, 0.2}, {12, 0.05}, {30, 0.3}, {50, 0.05}};
+  const auto similarity = [&eq5](LocationId c) {
+    auto it = eq5.find(c);
+    return it == eq5.end() ? 0.0 : it->second;
+  };
+  EXPECT_EQ(orderCandidates(s, similarity), (std::vector<LocationId>{10, 30, 11, 12, 50, 40}));
+}
+
+TEST(CandidateOrder, APlaceSearchedBackThisFrameIsCheckedThoughEq5CannotRankIt) {
+  // The frame's words were made before the place's words came back, so eq. 5 gives it nothing
+  // and it is neither the filter's choice nor among the most similar.
+  CandidateSources s;
+  s.hypothesis = 3;
+  s.most_similar = {4, 5};
+  s.searched_back = {77};
+  const auto order = orderCandidates(s, [](LocationId c) { return c == 77 ? 0.0 : 0.1; });
+  ASSERT_EQ(order.size(), 4u);
+  EXPECT_EQ(order.back(), 77);
+  FakeCheck check;
+  check.results = {{3, result(4, false)}, {4, result(5, false)}, {5, result(3, false)},
+                   {77, result(30, true)}};
+  const CandidateChoice choice = chooseCandidate(order, {}, GeometryRule::kEither, check.fn(),
+                                                 relaxed);
+  EXPECT_EQ(choice.location, 77);
+  EXPECT_TRUE(choice.passed);
+}
+
+TEST(CandidateOrder, NoHypothesisNoCandidates) {
+  CandidateSources s;
+  s.most_similar = {1, 2};
+  EXPECT_TRUE(orderCandidates(s, [](LocationId) { return 1.0; }).empty());
+}
 
 TEST(CandidateChoice, FirstPassEndsTheSearch) {
   FakeCheck check;

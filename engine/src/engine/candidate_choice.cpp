@@ -1,8 +1,26 @@
 #include "engine/candidate_choice.h"
 
 #include <algorithm>
+#include <set>
+#include <utility>
 
 namespace placedb {
+
+std::vector<LocationId> orderCandidates(const CandidateSources& sources,
+                                        const std::function<double(LocationId)>& similarity) {
+  std::vector<LocationId> ordered;
+  if (sources.hypothesis == kNewPlace) return ordered;
+  ordered.push_back(sources.hypothesis);
+  std::set<LocationId> seen{sources.hypothesis};
+  std::vector<std::pair<double, LocationId>> others;
+  for (const auto* list : {&sources.around, &sources.most_similar, &sources.searched_back,
+                           &sources.near_last_closure})
+    for (LocationId c : *list)
+      if (seen.insert(c).second) others.emplace_back(-similarity(c), c);
+  std::sort(others.begin(), others.end());
+  for (const auto& [negated, c] : others) ordered.push_back(c);
+  return ordered;
+}
 
 CandidateChoice chooseCandidate(const std::vector<LocationId>& ordered,
                                 const std::vector<LocationId>& near, GeometryRule rule,

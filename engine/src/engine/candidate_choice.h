@@ -1,6 +1,12 @@
 #pragma once
 // Which of a frame's loop-closure candidates its hypothesis names, given the geometric check.
 //
+// The candidates: the filter's best location, the WM locations within a few links of it, the
+// WM locations most similar by eq. 5, those the place-code search brought back from LTM in
+// this very frame, and the neighbourhood of the last accepted closure. The searched-back ones
+// are there in their own right because eq. 5 cannot rank them yet: the frame was quantised
+// before their words came back to the vocabulary, so it shares few words with them.
+//
 // Candidates come most likely first and the first one that passes ends the search: checking is
 // most of a frame's cost. Two exceptions keep a revisit on track:
 //  - a candidate within reach of the last accepted closure (near) that misses the check's rule
@@ -18,6 +24,19 @@
 #include "filter/bayes_filter.h"
 
 namespace placedb {
+
+struct CandidateSources {
+  LocationId hypothesis = kNewPlace;          // the filter's best
+  std::vector<LocationId> around;             // WM locations near it, nearest first
+  std::vector<LocationId> most_similar;       // WM locations by eq. 5, best first
+  std::vector<LocationId> searched_back;      // brought back from LTM by the place codes
+  std::vector<LocationId> near_last_closure;  // sorted
+};
+
+// Every source's locations once, most likely first: the hypothesis, then the others by
+// `similarity` (eq. 5), ties by id.
+std::vector<LocationId> orderCandidates(const CandidateSources& sources,
+                                        const std::function<double(LocationId)>& similarity);
 
 struct CandidateChoice {
   LocationId location = kNewPlace;        // when no candidate could be checked

@@ -145,6 +145,7 @@ class MapImpl final : public Map {
   std::optional<PlaceCoder> coder_;  // absent until the map's first location
   PlaceIndex places_;                // the place code of every location, every tier
   std::optional<std::vector<std::int8_t>> frame_code_;  // the current frame's, once computed
+  std::vector<LocationId> searched_back_;  // brought back from LTM by this frame's code search
   KeypointCache keypoint_cache_;  // of WM locations the geometric check compared frames with
   EngineCounters counters_;
   VocabularyStateWriter vocabulary_state_;

@@ -97,6 +97,7 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
 
   tiers_->beginFrame();
   frame_code_.reset();
+  searched_back_.clear();
   FrameResult r;
   FrameWrite w;
   r.frame_id = counters_.next_frame_id++;
@@ -346,6 +347,7 @@ void MapImpl::searchLongTermMemory(const Features& features, FrameWrite& write,
     if (tiers_->tierOf(m.location) == Tier::kLtm) ids.push_back(m.location);
   bringBack(ids, write, result);
   result.retrieved_by_search = ids.size();
+  searched_back_ = std::move(ids);  // loop candidates of this frame (candidate_choice.h)
 }
 
 void MapImpl::bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write,

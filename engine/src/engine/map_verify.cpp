@@ -106,19 +106,21 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   v.location = outcome.hypothesis;
   if (outcome.hypothesis == kNewPlace) return v;
 
+  CandidateSources sources;
+  sources.hypothesis = outcome.hypothesis;
   // Breadth-first over WM only: STM locations are never loop candidates.
-  std::vector<LocationId> candidates{outcome.hypothesis};
-  std::set<LocationId> seen{outcome.hypothesis};
-  std::size_t level_begin = 0;
+  const auto inWm = [this](LocationId id) {
+    return tiers_->contains(id) && tiers_->tierOf(id) == Tier::kWm;
+  };
+  std::set<LocationId> reached{outcome.hypothesis};
+  std::vector<LocationId> level{outcome.hypothesis};
   for (int depth = 0; depth < options_.hypothesis_radius; ++depth) {
-    const std::size_t level_end = candidates.size();
-    for (std::size_t k = level_begin; k < level_end; ++k) {
-      for (LocationId n : graph_.neighbourSet(candidates[k])) {
-        if (!seen.insert(n).second) continue;
-        if (tiers_->contains(n) && tiers_->tierOf(n) == Tier::kWm) candidates.push_back(n);
-      }
-    }
-    level_begin = level_end;
+    std::vector<LocationId> next;
+    for (LocationId c : level)
+      for (LocationId n : graph_.neighbourSet(c))
+        if (reached.insert(n).second && inWm(n)) next.push_back(n);
+    sources.around.insert(sources.around.end(), next.begin(), next.end());
+    level = std::move(next);
   }
 
   // The most similar WM locations compete too: after a long detour the filter's mass can sit a
@@ -131,15 +133,17 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
                         return a.similarity != b.similarity ? a.similarity > b.similarity
                                                             : a.location < b.location;
                       });
-    for (std::size_t i = 0; i < k; ++i)
-      if (seen.insert(top[i].location).second) candidates.push_back(top[i].location);
+    for (std::size_t i = 0; i < k; ++i) sources.most_similar.push_back(top[i].location);
   }
-
-  // The neighbourhood of the last accepted closure competes too: after a detour of the filter
-  // the revisit usually goes on where the previous frame's closure was.
-  const std::vector<LocationId> near = nearLastClosure(frame_id);
-  for (LocationId n : near)
-    if (seen.insert(n).second) candidates.push_back(n);
+  for (LocationId c : searched_back_)
+    if (inWm(c)) sources.searched_back.push_back(c);
+  // After a detour of the filter the revisit usually goes on where the previous frame's
+  // closure was.
+  sources.near_last_closure = nearLastClosure(frame_id);
+  const std::vector<LocationId>& near = sources.near_last_closure;
+  // Most likely first (candidate_choice.h says how the first pass ends the search).
+  const std::vector<LocationId> candidates = orderCandidates(
+      sources, [&similarities](LocationId c) { return similarityOf(similarities, c); });
 
   const GeometricCheckSettings geometry = toGeometricCheckSettings(options_);
   if (!geometricCheckOn(options_)) {
@@ -159,14 +163,6 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   // Entries of locations that left working memory go; a candidate is always in WM.
   keypoint_cache_.retainIf(
       [this](LocationId id) { return tiers_->contains(id) && tiers_->tierOf(id) == Tier::kWm; });
-
-  // Most likely first: the filter's choice, then by similarity (candidate_choice.h says how
-  // the first pass ends the search).
-  std::vector<std::pair<double, LocationId>> order;
-  for (std::size_t i = 1; i < candidates.size(); ++i)
-    order.emplace_back(-similarityOf(similarities, candidates[i]), candidates[i]);
-  std::sort(order.begin(), order.end());
-  for (std::size_t i = 1; i < candidates.size(); ++i) candidates[i] = order[i - 1].second;
 
   GeometricView query;
   query.descriptors = features.descriptors;
