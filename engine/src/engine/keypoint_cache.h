@@ -5,22 +5,28 @@
 // when the location leaves working memory, so the check reads SQLite once per location and
 // stay in WM instead of once per frame.
 //
-// An entry holds exactly the stored bytes and the check decodes them the same way whether they
-// came from the cache or from the file: a resumed run, whose cache starts empty, sees what a
-// straight run sees.
+// An entry holds exactly the stored bytes and their codes (storedDescriptorCodes), made from
+// them the same way whether they came from the cache or from the file: a resumed run, whose
+// cache starts empty, sees what a straight run sees. The codes are kept rather than decoded
+// floats: the matcher decodes only the rows it compares in full (descriptor_match.h), and they
+// are half the size of floats.
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <unordered_map>
 #include <vector>
 
 #include <opencv2/core.hpp>
 
+#include "engine/descriptor_match.h"
+
 namespace placedb {
 
 struct CachedKeypoints {
   std::vector<cv::Point2f> points;
-  std::vector<std::int64_t> words;        // the word each keypoint was quantised to
-  std::vector<std::uint8_t> descriptors;  // encodeDescriptors() rows; empty: none stored
+  std::vector<std::int64_t> words;               // the word each keypoint was quantised to
+  std::vector<std::uint8_t> descriptors;         // encodeDescriptors() rows; empty: none stored
+  std::shared_ptr<const DescriptorCodes> codes;  // of `descriptors`; null when none stored
 };
 
 class KeypointCache {
