@@ -15,11 +15,11 @@ namespace {
 
 constexpr int kDim = 64;
 
-cv::Mat randomUnitRows(int rows, std::mt19937& rng) {
+cv::Mat randomUnitRows(int rows, std::mt19937& rng, int dim = kDim) {
   std::normal_distribution<float> normal(0.f, 1.f);
-  cv::Mat d(rows, kDim, CV_32F);
+  cv::Mat d(rows, dim, CV_32F);
   for (int r = 0; r < rows; ++r) {
-    for (int c = 0; c < kDim; ++c) d.at<float>(r, c) = normal(rng);
+    for (int c = 0; c < dim; ++c) d.at<float>(r, c) = normal(rng);
     cv::normalize(d.row(r), d.row(r));
   }
   return d;
@@ -29,9 +29,9 @@ cv::Mat randomUnitRows(int rows, std::mt19937& rng) {
 // and equal to each other (ties), among unrelated ones.
 cv::Mat candidateRows(const cv::Mat& query, std::mt19937& rng) {
   std::normal_distribution<float> noise(0.f, 0.05f);
-  cv::Mat c = randomUnitRows(query.rows, rng);
+  cv::Mat c = randomUnitRows(query.rows, rng, query.cols);
   for (int r = 0; r < c.rows; r += 3) {
-    for (int k = 0; k < kDim; ++k) c.at<float>(r, k) = query.at<float>(r, k) + noise(rng);
+    for (int k = 0; k < query.cols; ++k) c.at<float>(r, k) = query.at<float>(r, k) + noise(rng);
     cv::normalize(c.row(r), c.row(r));
   }
   for (int r = 1; r + 1 < c.rows; r += 7) c.row(r).copyTo(c.row(r + 1));
@@ -77,6 +77,20 @@ TEST(DescriptorMatch, FloatCandidatesMatchLikeEveryPairCompared) {
   const DescriptorCodes c = quantiseDescriptors(candidate, kCandidateCodeLevels);
   expectSame(ratioMatches({&query, &q}, {&candidate, &c}, 0.64f),
              ratioMatchesBruteForce({&query, nullptr}, {&candidate, nullptr}, 0.64f));
+}
+
+// Lengths the wide integer loops do not divide (they fall back to narrower ones).
+TEST(DescriptorMatch, AnyLengthMatchesLikeEveryPairCompared) {
+  std::mt19937 rng(15);
+  for (int dim : {72, 60, 128}) {
+    const cv::Mat query = randomUnitRows(90, rng, dim);
+    const std::vector<std::uint8_t> bytes = encodeDescriptors(candidateRows(query, rng));
+    const cv::Mat decoded = decodeDescriptors(bytes, dim);
+    const DescriptorCodes q = quantiseDescriptors(query, kQueryCodeLevels);
+    const DescriptorCodes c = storedDescriptorCodes(bytes, dim);
+    expectSame(ratioMatches({&query, &q}, {nullptr, &c}, 0.64f),
+               ratioMatchesBruteForce({&query, nullptr}, {&decoded, nullptr}, 0.64f));
+  }
 }
 
 TEST(DescriptorMatch, RowsWithoutBoundsAreComparedInFull) {

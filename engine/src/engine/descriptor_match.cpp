@@ -5,6 +5,12 @@
 #include <cstring>
 #include <limits>
 #include <opencv2/core/hal/hal.hpp>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 namespace placedb {
 namespace {
@@ -19,11 +25,79 @@ constexpr double kAbsoluteSlack = 1e-30;
 // Beyond this length a float square can overflow: such rows are compared in full.
 constexpr double kLargestNorm = 1e15;
 
-// Exact integer sum: |code| <= levels on both sides and dim * levels_q * levels_c < 2^31.
+// Exact integer sums: |code| <= levels on both sides and dim * levels_q * levels_c < 2^31, so
+// no order of summation can overflow or round, and every instruction set gives the same sums.
 std::int32_t dot(const std::int16_t* a, const std::int16_t* b, int n) {
   std::int32_t s = 0;
   for (int k = 0; k < n; ++k) s += static_cast<std::int32_t>(a[k]) * b[k];
   return s;
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#define PLACEDB_DOTS_AVX2 1
+// Twice the SSE2 loop's width where the CPU has it; the sums are exact integers either way.
+__attribute__((target("avx2"))) int dotsAvx2(const std::int16_t* q, const std::int16_t* c, int rows,
+                                             int dim, std::int32_t* out) {
+  const std::size_t stride = static_cast<std::size_t>(dim);
+  int r = 0;
+  for (; r + 4 <= rows; r += 4) {
+    const std::int16_t* c0 = c + static_cast<std::size_t>(r) * stride;
+    __m256i s0 = _mm256_setzero_si256(), s1 = s0, s2 = s0, s3 = s0;
+    const std::int16_t *c1 = c0 + stride, *c2 = c1 + stride, *c3 = c2 + stride;
+    for (int k = 0; k < dim; k += 16) {
+      const __m256i qv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(q + k));
+      // (A lambda would not inherit the target attribute.)
+      s0 = _mm256_add_epi32(
+          s0, _mm256_madd_epi16(qv, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c0 + k))));
+      s1 = _mm256_add_epi32(
+          s1, _mm256_madd_epi16(qv, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c1 + k))));
+      s2 = _mm256_add_epi32(
+          s2, _mm256_madd_epi16(qv, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c2 + k))));
+      s3 = _mm256_add_epi32(
+          s3, _mm256_madd_epi16(qv, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c3 + k))));
+    }
+    // Pairwise adds leave each half with the four rows' partial sums; the halves add up.
+    const __m256i t = _mm256_hadd_epi32(_mm256_hadd_epi32(s0, s1), _mm256_hadd_epi32(s2, s3));
+    const __m128i sum = _mm_add_epi32(_mm256_castsi256_si128(t), _mm256_extracti128_si256(t, 1));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + r), sum);
+  }
+  return r;
+}
+#endif
+
+// The dot products of one query row with `rows` consecutive candidate rows.
+void dots(const std::int16_t* q, const std::int16_t* c, int rows, int dim, std::int32_t* out) {
+  int r = 0;
+#if defined(PLACEDB_DOTS_AVX2)
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2 && dim % 16 == 0) r = dotsAvx2(q, c, rows, dim, out);
+#endif
+#if defined(__SSE2__)
+  // Four candidate rows at a time share each load of the query and one final reduction.
+  if (dim % 8 == 0) {
+    const std::size_t stride = static_cast<std::size_t>(dim);
+    for (; r + 4 <= rows; r += 4) {
+      const std::int16_t* c0 = c + static_cast<std::size_t>(r) * stride;
+      __m128i s0 = _mm_setzero_si128(), s1 = s0, s2 = s0, s3 = s0;
+      for (int k = 0; k < dim; k += 8) {
+        const __m128i qv = _mm_loadu_si128(reinterpret_cast<const __m128i*>(q + k));
+        const auto at = [&](std::size_t row) {
+          return _mm_loadu_si128(reinterpret_cast<const __m128i*>(c0 + row * stride + k));
+        };
+        s0 = _mm_add_epi32(s0, _mm_madd_epi16(qv, at(0)));
+        s1 = _mm_add_epi32(s1, _mm_madd_epi16(qv, at(1)));
+        s2 = _mm_add_epi32(s2, _mm_madd_epi16(qv, at(2)));
+        s3 = _mm_add_epi32(s3, _mm_madd_epi16(qv, at(3)));
+      }
+      // Transpose-and-add: lane i of the result is the sum of s_i's four lanes.
+      const __m128i t01 = _mm_add_epi32(_mm_unpacklo_epi32(s0, s1), _mm_unpackhi_epi32(s0, s1));
+      const __m128i t23 = _mm_add_epi32(_mm_unpacklo_epi32(s2, s3), _mm_unpackhi_epi32(s2, s3));
+      const __m128i sum = _mm_add_epi32(_mm_unpacklo_epi64(t01, t23), _mm_unpackhi_epi64(t01, t23));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(out + r), sum);
+    }
+  }
+#endif
+  for (; r < rows; ++r) out[r] = dot(q, c + static_cast<std::size_t>(r) * dim, dim);
 }
 
 // A row's values as the full comparison sees them: the float rows, or the stored codes decoded
@@ -205,6 +279,7 @@ std::vector<RatioMatch> ratioMatches(const DescriptorSide& query, const Descript
 
   std::vector<RatioMatch> out;
   std::vector<double> approx(static_cast<std::size_t>(nc));
+  std::vector<std::int32_t> products(static_cast<std::size_t>(nc));
   std::vector<int> which;
   which.reserve(static_cast<std::size_t>(nc));
   std::vector<float> q_buffer(static_cast<std::size_t>(dim));
@@ -226,19 +301,16 @@ std::vector<RatioMatch> ratioMatches(const DescriptorSide& query, const Descript
     // Squared distances between the codes' vectors, and the two smallest.
     const std::int16_t* q_code = qc->codes.data() + qi * static_cast<std::size_t>(dim);
     const double q_norm_sq = qc->norm[qi] * qc->norm[qi], q_unit2 = 2.0 * qc->unit[qi];
-    double a1 = kInf, a2 = kInf;
+    dots(q_code, cc->codes.data(), nc, dim, products.data());
     for (int c = 0; c < nc; ++c) {
       const std::size_t ci = static_cast<std::size_t>(c);
-      const std::int32_t d =
-          dot(q_code, cc->codes.data() + ci * static_cast<std::size_t>(dim), dim);
-      const double a = q_norm_sq + c_norm_sq[ci] - q_unit2 * cc->unit[ci] * d;
-      approx[ci] = a;
-      if (a < a1) {
-        a2 = a1;
-        a1 = a;
-      } else if (a < a2) {
-        a2 = a;
-      }
+      approx[ci] = q_norm_sq + c_norm_sq[ci] - q_unit2 * cc->unit[ci] * products[ci];
+    }
+    // The two smallest, without branches (the order of candidates is unpredictable).
+    double a1 = kInf, a2 = kInf;
+    for (const double a : approx) {
+      a2 = std::min(a2, std::max(a1, a));
+      a1 = std::min(a1, a);
     }
     // A pair's distance of the values lies within `h` of its codes' distance (the triangle
     // inequality, both roundings, float slack); `delta` is the double sum's own error.
