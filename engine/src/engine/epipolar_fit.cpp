@@ -95,12 +95,14 @@ int sevenPoint(const Normalised& a, const Normalised& b, const int* idx, Mat3* o
   const double d0 = detAt(0), d1 = detAt(1), dm1 = detAt(-1), d2 = detAt(2);
   const double c0 = d0, c2 = (d1 + dm1) / 2 - d0, s = (d1 - dm1) / 2;
   const double c3 = (d2 - 4 * c2 - d0 - 2 * s) / 6, c1 = s - c3;
-  std::vector<double> roots;
-  const int count = cv::solveCubic(std::vector<double>{c3, c2, c1, c0}, roots);
+  // Fixed-size arrays: the same solver on the same numbers, without two allocations a sample.
+  const cv::Matx<double, 1, 4> coefficients(c3, c2, c1, c0);
+  cv::Matx<double, 3, 1> roots;
+  const int count = cv::solveCubic(coefficients, roots);
   int models = 0;
   for (int i = 0; i < count && i < 3; ++i) {
     Mat3& f = out[models++];
-    for (int j = 0; j < 9; ++j) f[j] = f2[j] + roots[i] * (f1[j] - f2[j]);
+    for (int j = 0; j < 9; ++j) f[j] = f2[j] + roots(i) * (f1[j] - f2[j]);
   }
   return models;
 }
