@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 #include <opencv2/core/hal/hal.hpp>
+#include <utility>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -98,6 +99,30 @@ void dots(const std::int16_t* q, const std::int16_t* c, int rows, int dim, std::
   }
 #endif
   for (; r < rows; ++r) out[r] = dot(q, c + static_cast<std::size_t>(r) * dim, dim);
+}
+
+// Keeps the two smallest values seen in (first, second).
+void offer(double v, double& first, double& second) {
+  second = std::min(second, std::max(first, v));
+  first = std::min(first, v);
+}
+
+// The two smallest values (with repeats), without branches: the candidates' order is
+// unpredictable. Four independent chains, merged at the end, keep the dependency on the
+// previous value from setting the pace.
+std::pair<double, double> twoSmallest(const std::vector<double>& values) {
+  double first[4] = {kInf, kInf, kInf, kInf}, second[4] = {kInf, kInf, kInf, kInf};
+  std::size_t i = 0;
+  for (; i + 4 <= values.size(); i += 4)
+    for (int lane = 0; lane < 4; ++lane) offer(values[i + lane], first[lane], second[lane]);
+  for (; i < values.size(); ++i) offer(values[i], first[0], second[0]);
+  // The two smallest of all are among each chain's two smallest.
+  double a1 = kInf, a2 = kInf;
+  for (int lane = 0; lane < 4; ++lane) {
+    offer(first[lane], a1, a2);
+    offer(second[lane], a1, a2);
+  }
+  return {a1, a2};
 }
 
 // A row's values as the full comparison sees them: the float rows, or the stored codes decoded
@@ -306,12 +331,7 @@ std::vector<RatioMatch> ratioMatches(const DescriptorSide& query, const Descript
       const std::size_t ci = static_cast<std::size_t>(c);
       approx[ci] = q_norm_sq + c_norm_sq[ci] - q_unit2 * cc->unit[ci] * products[ci];
     }
-    // The two smallest, without branches (the order of candidates is unpredictable).
-    double a1 = kInf, a2 = kInf;
-    for (const double a : approx) {
-      a2 = std::min(a2, std::max(a1, a));
-      a1 = std::min(a1, a);
-    }
+    const auto [a1, a2] = twoSmallest(approx);
     // A pair's distance of the values lies within `h` of its codes' distance (the triangle
     // inequality, both roundings, float slack); `delta` is the double sum's own error.
     const double lengths = qc->norm[qi] + qc->error[qi] + c_norm + c_error;
