@@ -141,19 +141,43 @@ double distance(const Mat3& f, const cv::Point2f& a, const cv::Point2f& b) {
   return norm > 0 ? num / std::sqrt(norm) : 1e30;
 }
 
-// distance(f, a, b) when it is at most max_error, else nothing: the square root and the
-// division, most of the cost, are skipped for pairs that are clearly farther. `far_sq` is
+// The pairs in double, one array per coordinate, and per model the two parts of distance():
+// a loop without branches over plain arrays, which the compiler runs two pairs at a time with
+// the same operations per pair as distance().
+struct Coordinates {
+  std::vector<double> ax, ay, bx, by;
+  Coordinates(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b, int n) {
+    for (int i = 0; i < n; ++i) {
+      ax.push_back(a[i].x);
+      ay.push_back(a[i].y);
+      bx.push_back(b[i].x);
+      by.push_back(b[i].y);
+    }
+  }
+};
+
+void distanceParts(const Mat3& f, const Coordinates& p, double* num, double* norm) {
+  const int n = static_cast<int>(p.ax.size());
+  const double* ax = p.ax.data();
+  const double* ay = p.ay.data();
+  const double* bx = p.bx.data();
+  const double* by = p.by.data();
+  for (int i = 0; i < n; ++i) {
+    const double lb0 = f[0] * ax[i] + f[1] * ay[i] + f[2], lb1 = f[3] * ax[i] + f[4] * ay[i] + f[5],
+                 lb2 = f[6] * ax[i] + f[7] * ay[i] + f[8];
+    const double la0 = f[0] * bx[i] + f[3] * by[i] + f[6], la1 = f[1] * bx[i] + f[4] * by[i] + f[7];
+    num[i] = std::abs(bx[i] * lb0 + by[i] * lb1 + lb2);
+    const double nb = lb0 * lb0 + lb1 * lb1, na = la0 * la0 + la1 * la1;
+    norm[i] = std::min(nb, na);
+  }
+}
+
+// distance() from its parts when it is at most max_error, else nothing: the square root and
+// the division, most of the cost, are skipped for pairs that are clearly farther. `far_sq` is
 // max_error^2 (1 + 1e-6): well beyond the rounding of either side, so a pair it rules out is
 // one that distance() would have put beyond max_error too, and every kept distance is
 // distance()'s own value.
-bool within(const Mat3& f, const cv::Point2f& a, const cv::Point2f& b, double max_error,
-            double far_sq, double* d) {
-  const double lb0 = f[0] * a.x + f[1] * a.y + f[2], lb1 = f[3] * a.x + f[4] * a.y + f[5],
-               lb2 = f[6] * a.x + f[7] * a.y + f[8];
-  const double la0 = f[0] * b.x + f[3] * b.y + f[6], la1 = f[1] * b.x + f[4] * b.y + f[7];
-  const double num = std::abs(b.x * lb0 + b.y * lb1 + lb2);
-  const double nb = lb0 * lb0 + lb1 * lb1, na = la0 * la0 + la1 * la1;
-  const double norm = std::min(nb, na);
+bool within(double num, double norm, double max_error, double far_sq, double* d) {
   // Away from underflow and overflow of the squares, whose rounding the margin would not cover.
   if (norm > 1e-200 && num < 1e100 && num * num > far_sq * norm) return false;
   *d = norm > 0 ? num / std::sqrt(norm) : 1e30;
@@ -185,6 +209,8 @@ EpipolarFit fitEpipolar(const std::vector<cv::Point2f>& a, const std::vector<cv:
   const int n = static_cast<int>(std::min(a.size(), b.size()));
   if (n <= kSample || settings.iterations <= 0) return fit;
   const Normalised na = normalise(a), nb = normalise(b);
+  const Coordinates coordinates(a, b, n);
+  std::vector<double> num(static_cast<std::size_t>(n)), norm(static_cast<std::size_t>(n));
 
   // Everything but the distance of the NFA, per k, once.
   const int iterations = settings.iterations;
@@ -215,9 +241,10 @@ EpipolarFit fitEpipolar(const std::vector<cv::Point2f>& a, const std::vector<cv:
     for (int m = 0; m < count; ++m) {
       const Mat3 f = toPixels(models[m], na, nb);
       close.clear();
+      distanceParts(f, coordinates, num.data(), norm.data());
       for (int i = 0; i < n; ++i) {
         double d;
-        if (within(f, a[i], b[i], settings.max_error_px, far_sq, &d)) close.push_back(d);
+        if (within(num[i], norm[i], settings.max_error_px, far_sq, &d)) close.push_back(d);
       }
       fit.most_within_max_error =
           std::max(fit.most_within_max_error, static_cast<int>(close.size()));
