@@ -36,11 +36,9 @@ CachedKeypoints MapImpl::loadKeypoints(std::int64_t location_id) const {
     entry.points.emplace_back(ref.x, ref.y);
     entry.words.push_back(ref.word_id);
   }
-  if (auto bytes = store_->getState(keypointDescriptorsKey(location_id))) {
-    entry.descriptors = std::move(*bytes);
-    entry.codes = std::make_shared<const DescriptorCodes>(
-        storedDescriptorCodes(entry.descriptors, vocabulary_->dim()));
-  }
+  if (auto bytes = store_->getState(keypointDescriptorsKey(location_id)))
+    entry.codes =
+        std::make_shared<const DescriptorCodes>(storedDescriptorCodes(*bytes, vocabulary_->dim()));
   return entry;
 }
 
