@@ -93,6 +93,20 @@ TEST(DescriptorMatch, AnyLengthMatchesLikeEveryPairCompared) {
   }
 }
 
+// Squares in float's denormal range round coarsely: the bounds' absolute floor covers them.
+TEST(DescriptorMatch, TinyValuesMatchLikeEveryPairCompared) {
+  std::mt19937 rng(16);
+  for (float scale : {1e-18f, 1e-20f, 1e-22f}) {
+    const cv::Mat query = randomUnitRows(80, rng) * scale;
+    const cv::Mat candidate = candidateRows(query / scale, rng) * scale;
+    const DescriptorCodes q = quantiseDescriptors(query, kQueryCodeLevels);
+    const DescriptorCodes c = quantiseDescriptors(candidate, kCandidateCodeLevels);
+    for (float ratio_sq : {0.01f, 0.64f})
+      expectSame(ratioMatches({&query, &q}, {&candidate, &c}, ratio_sq),
+                 ratioMatchesBruteForce({&query, nullptr}, {&candidate, nullptr}, ratio_sq));
+  }
+}
+
 TEST(DescriptorMatch, RowsWithoutBoundsAreComparedInFull) {
   std::mt19937 rng(13);
   cv::Mat query = randomUnitRows(40, rng);

@@ -20,9 +20,11 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Float arithmetic moves a computed distance by a few parts per million of the vectors'
 // lengths at most (64 rounded squares summed; the decode's two roundings); the bounds allow
-// ten times that, and an absolute floor for denormal values.
+// ten times that. Values so small that their squares are denormal lose more, absolutely: at
+// most some hundred steps of 1.4e-45 in a squared distance, ~5e-22 in a distance, which the
+// absolute floor covers.
 constexpr double kRelativeSlack = 1e-5;
-constexpr double kAbsoluteSlack = 1e-30;
+constexpr double kAbsoluteSlack = 1e-20;
 // Beyond this length a float square can overflow: such rows are compared in full.
 constexpr double kLargestNorm = 1e15;
 
@@ -339,9 +341,12 @@ std::vector<RatioMatch> ratioMatches(const DescriptorSide& query, const Descript
     const double delta = 1e-12 * lengths * lengths + kAbsoluteSlack;
     const double second_at_most = std::sqrt(a2 + delta) + h;
     const double nearest_at_least = std::sqrt(std::max(0.0, a1 - delta)) - h;
-    // The nearest cannot be closer than ratio_sq times the second: the ratio test fails.
-    if (nearest_at_least > 0 && nearest_at_least * nearest_at_least >=
-                                    double(ratio_sq) * second_at_most * second_at_most * (1 + 1e-4))
+    // The nearest cannot be closer than ratio_sq times the second: the ratio test fails (the
+    // margins cover the rounding of the float product, relative and denormal).
+    if (nearest_at_least > 0 &&
+        nearest_at_least * nearest_at_least >=
+            double(ratio_sq) * second_at_most * second_at_most * (1 + 1e-4) +
+                kAbsoluteSlack * kAbsoluteSlack)
       continue;
     // Rows that may be nearest or second nearest: their lowest possible distance does not
     // exceed the second-highest highest possible one.
