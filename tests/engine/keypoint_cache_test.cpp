@@ -10,7 +10,9 @@ CachedKeypoints entry(float x) {
   CachedKeypoints e;
   e.points = {{x, 1.f}};
   e.words = {7};
-  e.descriptors = {1, 2, 3};
+  auto codes = std::make_shared<DescriptorCodes>();
+  codes->rows = 3;
+  e.codes = codes;
   return e;
 }
 
@@ -20,7 +22,8 @@ TEST(KeypointCache, FindsWhatWasInserted) {
   const CachedKeypoints& stored = cache.insert(4, entry(2.f));
   EXPECT_EQ(stored.points[0].x, 2.f);
   ASSERT_NE(cache.find(4), nullptr);
-  EXPECT_EQ(cache.find(4)->descriptors, (std::vector<std::uint8_t>{1, 2, 3}));
+  ASSERT_NE(cache.find(4)->codes, nullptr);
+  EXPECT_EQ(cache.find(4)->codes->rows, 3);
 }
 
 TEST(KeypointCache, RetainIfDropsLocationsThatLeft) {

@@ -5,8 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <limits>
-#include <opencv2/core/hal/hal.hpp>
 
 namespace placedb {
 std::vector<std::uint8_t> encodeDescriptors(const cv::Mat& descriptors) {
@@ -116,33 +114,29 @@ Pairs wordPairs(const GeometricView& query, const GeometricView& candidate) {
 Pairs descriptorPairs(const GeometricView& query, const GeometricView& candidate,
                       const Pairs& words, double ratio) {
   Pairs pairs;
-  if (query.descriptors.rows < 2 || candidate.descriptors.rows < 2) return words;
+  DescriptorSide q_side{&query.descriptors, query.codes.get()};
+  DescriptorSide c_side{&candidate.descriptors, candidate.codes.get()};
+  if (q_side.rows() < 2 || c_side.rows() < 2) return words;
+  // Codes for a side that came without them (a caller's own view, word descriptors).
+  DescriptorCodes q_codes, c_codes;
+  if (!q_side.codes) {
+    q_codes = quantiseDescriptors(query.descriptors, kQueryCodeLevels);
+    q_side.codes = &q_codes;
+  }
+  if (!c_side.codes) {
+    c_codes = quantiseDescriptors(candidate.descriptors, kCandidateCodeLevels);
+    c_side.codes = &c_codes;
+  }
   struct Kept {
     int query, candidate;
     float distance, ratio;
   };
-  // Brute force on this thread: a parallel matcher waits for pool threads on a busy machine
-  // longer than the work takes.
+  // On this thread: a parallel matcher waits for pool threads on a busy machine longer than
+  // the work takes.
   std::vector<Kept> kept;
-  const int dim = query.descriptors.cols;
-  const float ratio_sq = static_cast<float>(ratio * ratio);
-  for (int q = 0; q < query.descriptors.rows; ++q) {
-    const float* qd = query.descriptors.ptr<float>(q);
-    float d1 = std::numeric_limits<float>::max(), d2 = d1;
-    int best = -1;
-    for (int c = 0; c < candidate.descriptors.rows; ++c) {
-      const float d = cv::hal::normL2Sqr_(qd, candidate.descriptors.ptr<float>(c), dim);
-      if (d < d1) {
-        d2 = d1;
-        d1 = d;
-        best = c;
-      } else if (d < d2) {
-        d2 = d;
-      }
-    }
-    if (best >= 0 && d1 < ratio_sq * d2)
-      kept.push_back({q, best, std::sqrt(d1), d2 > 0 ? std::sqrt(d1 / d2) : 0.f});
-  }
+  for (const RatioMatch& m : ratioMatches(q_side, c_side, static_cast<float>(ratio * ratio)))
+    kept.push_back(
+        {m.query, m.candidate, std::sqrt(m.d1), m.d2 > 0 ? std::sqrt(m.d1 / m.d2) : 0.f});
   std::sort(kept.begin(), kept.end(), [](const Kept& x, const Kept& y) {
     return x.candidate != y.candidate ? x.candidate < y.candidate : x.distance < y.distance;
   });

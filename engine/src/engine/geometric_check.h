@@ -33,10 +33,12 @@
 // the count, while the same-street pairs, at NFA 1e-1..1e1, do not. bench/quality/README.md
 // has the figures of all three.
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <opencv2/core.hpp>
 
+#include "engine/descriptor_match.h"
 #include "placedb/options.h"
 
 namespace placedb {
@@ -69,10 +71,17 @@ struct GeometricResult {
   bool still = false;  // passed as pairs that did not move (a camera standing still)
 };
 
-struct GeometricView {  // keypoints and one descriptor row per keypoint (CV_32F)
+// Code levels (descriptor_match.h) of a frame's own descriptors, rounded once per frame, and of
+// float descriptors a candidate view brings without codes.
+constexpr int kQueryCodeLevels = 8191;
+constexpr int kCandidateCodeLevels = 127;
+
+struct GeometricView {  // keypoints and one descriptor row per keypoint
   std::vector<cv::Point2f> points;
-  cv::Mat descriptors;
+  cv::Mat descriptors;  // CV_32F; may be empty when `codes` are stored ones (they decode)
   std::vector<std::int64_t> words;  // each keypoint's word, -1 for none; may be empty
+  // The descriptors' codes, when the caller keeps them (the check rounds them otherwise).
+  std::shared_ptr<const DescriptorCodes> codes;
 };
 
 // Whether a is the better result by the rule's own measure (more inliers, or a lower NFA).

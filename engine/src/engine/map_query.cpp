@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <map>
+#include <memory>
 #include <set>
 
 #include "engine/map_impl.h"
@@ -96,6 +97,8 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
     view.descriptors = features.descriptors;
     for (const auto& k : features.keypoints) view.points.emplace_back(k.x, k.y);
     view.words = q.word_of_feature;
+    view.codes = std::make_shared<const DescriptorCodes>(
+        quantiseDescriptors(features.descriptors, kQueryCodeLevels));
     auto check = [&](const std::vector<LocationId>& which) {
       for (LocationId id : which) {
         // Read from the file, not the mapping's cache: a query may touch any location.

@@ -3,6 +3,7 @@
 // one (its prediction smears mass along the path), so its WM neighbours compete with it.
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <optional>
 #include <set>
 
@@ -36,7 +37,8 @@ CachedKeypoints MapImpl::loadKeypoints(std::int64_t location_id) const {
     entry.words.push_back(ref.word_id);
   }
   if (auto bytes = store_->getState(keypointDescriptorsKey(location_id)))
-    entry.descriptors = std::move(*bytes);
+    entry.codes =
+        std::make_shared<const DescriptorCodes>(storedDescriptorCodes(*bytes, vocabulary_->dim()));
   return entry;
 }
 
@@ -46,9 +48,11 @@ GeometricView MapImpl::viewOf(const CachedKeypoints& keypoints) const {
   view.words = keypoints.words;
   // The location's own descriptors when it has them (three times the matches of word
   // descriptors on lip6_outdoor); maps made before they were kept fall back to its words'.
-  if (!keypoints.descriptors.empty()) {
-    view.descriptors = decodeDescriptors(keypoints.descriptors, vocabulary_->dim());
-    if (view.descriptors.rows == static_cast<int>(keypoints.points.size())) return view;
+  // They stay codes: the matcher decodes the rows it compares in full.
+  if (keypoints.codes && keypoints.codes->rows == static_cast<int>(keypoints.points.size()) &&
+      keypoints.codes->rows > 0) {
+    view.codes = keypoints.codes;
+    return view;
   }
   view.points.clear();
   view.words.clear();
@@ -169,6 +173,8 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   query.points.reserve(features.size());
   for (const auto& k : features.keypoints) query.points.emplace_back(k.x, k.y);
   query.words = word_of_feature;
+  query.codes = std::make_shared<const DescriptorCodes>(
+      quantiseDescriptors(features.descriptors, kQueryCodeLevels));
   const CandidateChoice choice = chooseCandidate(
       candidates, near, geometry.rule,
       [&](LocationId c) -> std::optional<GeometricResult> {
