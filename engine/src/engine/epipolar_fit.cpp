@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <unordered_set>
 
 namespace placedb {
 namespace {
@@ -225,6 +226,7 @@ EpipolarFit fitEpipolar(const std::vector<cv::Point2f>& a, const std::vector<cv:
   std::vector<double> close;
   close.reserve(static_cast<std::size_t>(n));
   Mat3 best_f{};
+  std::unordered_set<std::uint64_t> drawn;  // sets of pairs tried, as bit masks (n <= 64)
   for (int it = 0; it < iterations; ++it) {
     // Early samples come from the first pairs only (the most reliable), widening to all of
     // them by half the iterations.
@@ -235,6 +237,14 @@ EpipolarFit fitEpipolar(const std::vector<cv::Point2f>& a, const std::vector<cv:
       const int c =
           static_cast<int>(static_cast<std::uint32_t>(rng()) % static_cast<std::uint32_t>(pool));
       if (std::find(idx, idx + s, c) == idx + s) idx[s++] = c;
+    }
+    // A set of pairs drawn again fits the same models: on few pairs most draws are repeats (8
+    // pairs hold 8 sets of 7, 10 hold 120, against 400 draws). The random stream and the stops
+    // below go on as before, so the fit is the one every draw would give.
+    if (n <= 64) {
+      std::uint64_t set = 0;
+      for (int s = 0; s < kSample; ++s) set |= std::uint64_t{1} << idx[s];
+      if (!drawn.insert(set).second) continue;
     }
     Mat3 models[3];
     const int count = sevenPoint(na, nb, idx, models);
