@@ -63,10 +63,10 @@ TEST(CandidateOrder, APlaceSearchedBackThisFrameIsCheckedThoughEq5CannotRankIt) 
   ASSERT_EQ(order.size(), 4u);
   EXPECT_EQ(order.back(), 77);
   FakeCheck check;
-  check.results = {{3, result(4, false)}, {4, result(5, false)}, {5, result(3, false)},
-                   {77, result(30, true)}};
-  const CandidateChoice choice = chooseCandidate(order, {}, GeometryRule::kEither, check.fn(),
-                                                 relaxed);
+  check.results = {
+      {3, result(4, false)}, {4, result(5, false)}, {5, result(3, false)}, {77, result(30, true)}};
+  const CandidateChoice choice =
+      chooseCandidate(order, {}, GeometryRule::kEither, check.fn(), relaxed);
   EXPECT_EQ(choice.location, 77);
   EXPECT_TRUE(choice.passed);
 }

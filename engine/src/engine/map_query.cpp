@@ -5,9 +5,10 @@
 // RAM (STM and WM), and the place codes over every location, LTM included. Each candidate goes
 // through the mapping's geometric check against its own stored keypoints, and so do the
 // locations within two links of the best one that passes (again around a neighbour that beats
-// it, until the best stays the same); the verdict is "known" when the best candidate passes it (the mapping's geometry rule), "unknown" when none does. A
-// place never seen still finds look-alike candidates, but their matches do not agree on one
-// epipolar geometry, so it is reported unknown instead of as its nearest look-alike.
+// it, until the best stays the same); the verdict is "known" when the best candidate passes it (the
+// mapping's geometry rule), "unknown" when none does. A place never seen still finds look-alike
+// candidates, but their matches do not agree on one epipolar geometry, so it is reported unknown
+// instead of as its nearest look-alike.
 #include <algorithm>
 #include <chrono>
 #include <map>
