@@ -26,6 +26,9 @@ TEST(MemoryTiers, StmOverflowsOldestFirstIntoWm) {
   EXPECT_EQ(m.tierOf(4), Tier::kStm);
   EXPECT_EQ(m.stm(), (std::deque<MemoryLocationId>{2, 3, 4}));
   EXPECT_EQ(m.checkInvariants(), "");
+  EXPECT_TRUE(m.isIn(1, Tier::kWm));
+  EXPECT_FALSE(m.isIn(4, Tier::kWm));
+  EXPECT_FALSE(m.isIn(99, Tier::kWm)) << "an unknown location is in no tier, not an error";
   EXPECT_THROW(m.push(4), Error);
 
   MemoryTiers no_stm(smallStm(0));  // every location goes straight to WM

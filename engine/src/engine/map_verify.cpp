@@ -90,9 +90,7 @@ std::vector<LocationId> MapImpl::nearLastClosure(std::int64_t frame_id) const {
       frame_id - counters_.last_closure_frame > options_.temporal_max_gap)
     return {};
   std::vector<LocationId> near;
-  const auto inWm = [this](LocationId id) {
-    return tiers_->contains(id) && tiers_->tierOf(id) == Tier::kWm;
-  };
+  const auto inWm = [this](LocationId id) { return tiers_->isIn(id, Tier::kWm); };
   // Along the traversal only: through a loop-closure link the walk would reach another visit of
   // the place, whose offset from this one adds to the closure's own.
   for (const auto& [id, depth] :
@@ -113,9 +111,7 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   CandidateSources sources;
   sources.hypothesis = outcome.hypothesis;
   // Breadth-first over WM only: STM locations are never loop candidates.
-  const auto inWm = [this](LocationId id) {
-    return tiers_->contains(id) && tiers_->tierOf(id) == Tier::kWm;
-  };
+  const auto inWm = [this](LocationId id) { return tiers_->isIn(id, Tier::kWm); };
   std::set<LocationId> reached{outcome.hypothesis};
   std::vector<LocationId> level{outcome.hypothesis};
   for (int depth = 0; depth < options_.hypothesis_radius; ++depth) {
@@ -165,8 +161,7 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   }
 
   // Entries of locations that left working memory go; a candidate is always in WM.
-  keypoint_cache_.retainIf(
-      [this](LocationId id) { return tiers_->contains(id) && tiers_->tierOf(id) == Tier::kWm; });
+  keypoint_cache_.retainIf([this](LocationId id) { return tiers_->isIn(id, Tier::kWm); });
 
   GeometricView query;
   query.descriptors = features.descriptors;

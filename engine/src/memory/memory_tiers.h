@@ -117,6 +117,10 @@ class MemoryTiers {
   void addToLtm(MemoryLocationId id, std::int64_t weight);
 
   bool contains(MemoryLocationId id) const { return records_.count(id) != 0; }
+  bool isIn(MemoryLocationId id, Tier tier) const {  // known, and in that tier
+    const auto it = records_.find(id);
+    return it != records_.end() && it->second.tier == tier;
+  }
   Tier tierOf(MemoryLocationId id) const;  // kInvalidArgument when unknown
   std::int64_t weightOf(MemoryLocationId id) const;
   std::int64_t ageOf(MemoryLocationId id) const;
