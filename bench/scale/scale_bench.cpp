@@ -104,18 +104,10 @@ Flags parseFlags(int argc, char** argv) {
   Flags f;
   for (int i = 1; i < argc; ++i) {
     std::string flag = argv[i];
-    if (flag == "--reopen-only") {
+    if (flag == "--reopen-only" || flag == "--query-only") {
       if (i + 1 >= argc) throw std::invalid_argument(flag + " needs a map");
-      f.map = argv[i + 1];
-      f.reopen_only = true;
-      ++i;
-      continue;
-    }
-    if (flag == "--query-only") {
-      if (i + 1 >= argc) throw std::invalid_argument(flag + " needs a map");
-      f.map = argv[i + 1];
-      f.query_only = true;
-      ++i;
+      f.map = argv[++i];
+      (flag == "--reopen-only" ? f.reopen_only : f.query_only) = true;
       continue;
     }
     if (flag == "--show") {
