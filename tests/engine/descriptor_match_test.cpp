@@ -2,6 +2,7 @@
 // rows, the same nearest candidate on ties, the same float distances bit for bit.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -88,6 +89,21 @@ TEST(DescriptorMatch, AnyLengthMatchesLikeEveryPairCompared) {
     const cv::Mat decoded = decodeDescriptors(bytes, dim);
     const DescriptorCodes q = quantiseDescriptors(query, kQueryCodeLevels);
     const DescriptorCodes c = storedDescriptorCodes(bytes, dim);
+    expectSame(ratioMatches({&query, &q}, {nullptr, &c}, 0.64f),
+               ratioMatchesBruteForce({&query, nullptr}, {&decoded, nullptr}, 0.64f));
+  }
+}
+
+// Query rows go two at a time and candidate rows four at a time: odd counts leave tails.
+TEST(DescriptorMatch, OddRowCountsMatchLikeEveryPairCompared) {
+  std::mt19937 rng(17);
+  for (int rows : {7, 37, 91}) {
+    const cv::Mat query = randomUnitRows(rows, rng);
+    const std::vector<std::uint8_t> bytes =
+        encodeDescriptors(candidateRows(query.rowRange(0, std::min(rows, 37)), rng));
+    const cv::Mat decoded = decodeDescriptors(bytes, kDim);
+    const DescriptorCodes q = quantiseDescriptors(query, kQueryCodeLevels);
+    const DescriptorCodes c = storedDescriptorCodes(bytes, kDim);
     expectSame(ratioMatches({&query, &q}, {nullptr, &c}, 0.64f),
                ratioMatchesBruteForce({&query, nullptr}, {&decoded, nullptr}, 0.64f));
   }

@@ -60,6 +60,11 @@ class PlaceCoder {
 // accepts (65536 x 127^2 < 2^31).
 std::int32_t codeDot(const std::int8_t* a, const std::int8_t* b, std::size_t code_dim);
 
+// codeDot of `query` with each of `rows` codes stored back to back, into out[0 .. rows): the
+// same exact sums, with AVX2 where the CPU has it (a map's every code is scanned each frame).
+void codeDots(const std::int8_t* query, const std::int8_t* codes, std::size_t rows,
+              std::size_t code_dim, std::int32_t* out);
+
 // Cosine similarity of two codes of the same length, in [-1, 1]; 0 when either is all zeros.
 double codeSimilarity(const std::int8_t* a, const std::int8_t* b, int code_dim);
 
