@@ -132,6 +132,9 @@ class MapImpl final : public Map {
   void leaveIndex(const WordChanges& changes);  // unreferenced words leave, imported ones stay
   void commit(FrameWrite& write, FrameResult& result, const std::string& source_path);
   std::vector<FrameRef> framesOf(std::int64_t location_id) const;
+  // Localisation: makes the vocabulary complete (the words of LTM locations too) and indexes
+  // the LTM signatures, once, when the map's words fit the budget; else leaves LTM to the codes.
+  void loadLtmWords();
 
   std::unique_ptr<storage::MapStore> store_;
   Mode mode_;
@@ -144,6 +147,9 @@ class MapImpl final : public Map {
   std::unique_ptr<BayesFilter> filter_;
   std::optional<PlaceCoder> coder_;  // absent until the map's first location
   PlaceIndex places_;                // the place code of every location, every tier
+  // Localisation only: the signatures of LTM locations, their words added to the vocabulary,
+  // loaded by the first query when the map's words fit kQueryWordBudget (map_query.cpp).
+  std::optional<InvertedIndex> ltm_words_;
   std::optional<std::vector<std::int8_t>> frame_code_;  // the current frame's, once computed
   std::vector<LocationId> searched_back_;  // brought back from LTM by this frame's code search
   KeypointCache keypoint_cache_;  // of WM locations the geometric check compared frames with
