@@ -41,6 +41,16 @@ std::vector<LinkRecord> MapStore::links(std::int64_t location_id) const {
   return result;
 }
 
+std::vector<LinkRecord> MapStore::linksOfType(LinkType type) const {
+  auto s = db_->cached(
+      "SELECT location_a, location_b, type, score FROM links WHERE type = ?1 ORDER BY 1, 2");
+  s->bind(1, std::int64_t{static_cast<int>(type)});
+  std::vector<LinkRecord> result;
+  while (s->step())
+    result.push_back({s->columnInt(0), s->columnInt(1), type, s->columnOptionalDouble(3)});
+  return result;
+}
+
 std::vector<std::int64_t> MapStore::linkedInTier(std::int64_t location_id, Tier tier,
                                                  std::optional<LinkType> type) const {
   auto s = db_->cached(

@@ -59,6 +59,31 @@ TEST_F(LtmSearchTest, QueryFindsPlacesThatMovedToLongTermMemory) {
   EXPECT_EQ(readBytes(path_), before) << "localisation must leave the map byte-identical";
 }
 
+TEST_F(LtmSearchTest, QueryFindsLtmPlacesByTheirOwnWords) {
+  Options options;
+  options.wm_max = 8;
+  mapFirst(44, options);
+  const std::string before = readBytes(path_);
+
+  // The mapping dropped the words of these places from RAM; a query takes them back, so a frame
+  // of an LTM place shares its words with it (eq. 5 of 0.86-0.98 here, 0.17-0.37 when the
+  // query only had the words of WM) and the word search ranks it.
+  auto map = Map::open(path_.string(), options, Map::Mode::kLocalisation);
+  std::size_t asked = 0, by_words = 0;
+  for (std::size_t i = 0; i < 44; ++i) {
+    const QueryResult q = map->query(seq_->images[i], 3);
+    if (q.matches.empty()) continue;  // a frame without features
+    const QueryMatch& best = q.matches.front();
+    if (best.tier != Tier::kLtm || !covers(best, static_cast<std::int64_t>(i), 0)) continue;
+    ++asked;
+    if (best.similarity > 0.5) ++by_words;
+  }
+  EXPECT_GE(asked, 8u) << "frames of LTM places answered with their own location";
+  EXPECT_EQ(by_words, asked) << "their words were searched, not only their codes";
+  map.reset();
+  EXPECT_EQ(readBytes(path_), before) << "localisation must leave the map byte-identical";
+}
+
 TEST_F(LtmSearchTest, AnImageOfNoStoredPlaceIsUnknown) {
   mapFirst(40, Options());
   auto map = Map::open(path_.string(), Options(), Map::Mode::kLocalisation);

@@ -309,6 +309,13 @@ TEST_F(Records, LinksStoredOncePerPairAndType) {
   EXPECT_EQ(store_->linkedInTier(2, Tier::kWm), (std::vector<std::int64_t>{1, 4}));
   EXPECT_EQ(store_->linkedInTier(2, Tier::kWm, LinkType::kMerge), (std::vector<std::int64_t>{4}));
   EXPECT_TRUE(store_->linkedInTier(2, Tier::kLtm, LinkType::kLoopClosure).empty());
+  const auto neighbours = store_->linksOfType(LinkType::kNeighbour);
+  ASSERT_EQ(neighbours.size(), 2u);
+  EXPECT_EQ(neighbours[0].location_a, 1);
+  EXPECT_EQ(neighbours[0].location_b, 2);
+  EXPECT_EQ(neighbours[1].location_a, 2);
+  EXPECT_EQ(neighbours[1].location_b, 3);
+  EXPECT_EQ(store_->linksOfType(LinkType::kMerge).size(), 1u);
 }
 
 TEST_F(Records, HypothesesStateAndVocabularyImports) {

@@ -20,6 +20,7 @@
 #include "memory/memory_tiers.h"
 #include "memory/place_code.h"
 #include "memory/place_index.h"
+#include "memory/place_neighbourhood.h"
 #include "placedb/map.h"
 #include "placedb/storage/map_store.h"
 #include "vocabulary/vocabulary.h"
@@ -132,6 +133,10 @@ class MapImpl final : public Map {
   void leaveIndex(const WordChanges& changes);  // unreferenced words leave, imported ones stay
   void commit(FrameWrite& write, FrameResult& result, const std::string& source_path);
   std::vector<FrameRef> framesOf(std::int64_t location_id) const;
+  // Localisation: makes the vocabulary complete (the words of LTM locations too) and indexes
+  // the LTM signatures, once, when the map's words fit the budget; else leaves LTM to the codes.
+  void loadLtmWords();
+  void loadPlaceNeighbourhood();  // localisation: the neighbour links over the place codes
 
   std::unique_ptr<storage::MapStore> store_;
   Mode mode_;
@@ -144,6 +149,12 @@ class MapImpl final : public Map {
   std::unique_ptr<BayesFilter> filter_;
   std::optional<PlaceCoder> coder_;  // absent until the map's first location
   PlaceIndex places_;                // the place code of every location, every tier
+  // Localisation only: the signatures of LTM locations, their words added to the vocabulary,
+  // loaded by the first query when the map's words fit kQueryWordBudget (map_query.cpp).
+  std::optional<InvertedIndex> ltm_words_;
+  // Localisation only: the neighbour links of every location over the place codes, for the
+  // query's code search (built by the first query).
+  std::optional<PlaceNeighbourhood> place_neighbourhood_;
   std::optional<std::vector<std::int8_t>> frame_code_;  // the current frame's, once computed
   std::vector<LocationId> searched_back_;  // brought back from LTM by this frame's code search
   KeypointCache keypoint_cache_;  // of WM locations the geometric check compared frames with

@@ -145,6 +145,8 @@ void MapImpl::restoreFromStore() {
   // Place codes of every tier, and the centres that made them.
   coder_.reset();
   places_.clear();
+  place_neighbourhood_.reset();  // of the codes just cleared
+  ltm_words_.reset();            // their words went with the vocabulary configure() replaced
   if (auto centres = store_->getState(kPlaceCoderKey)) {
     try {
       coder_ = PlaceCoder::fromBytes(*centres, extractor_->dim());

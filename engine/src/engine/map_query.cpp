@@ -1,14 +1,20 @@
 // Localisation: an image against the stored locations of every tier, changing nothing in RAM or
 // in the file.
 //
-// Candidates come from two searches: the bag-of-words similarity (eq. 5) over the locations in
-// RAM (STM and WM), and the place codes over every location, LTM included. Each candidate goes
-// through the mapping's geometric check against its own stored keypoints, and so do the
-// locations within two links of the best one that passes (again around a neighbour that beats
-// it, until the best stays the same); the verdict is "known" when the best candidate passes it (the
-// mapping's geometry rule), "unknown" when none does. A place never seen still finds look-alike
-// candidates, but their matches do not agree on one epipolar geometry, so it is reported unknown
-// instead of as its nearest look-alike.
+// Candidates come from two searches: the bag-of-words similarity (eq. 5), and the place codes
+// over every location, LTM included. The words cover STM and WM, and LTM too when the map's
+// vocabulary fits kQueryWordBudget: the mapping dropped an LTM location's words from RAM, so a
+// revisit was quantised to other words, but a read-only map can take them all back, and eq. 5
+// over every location ranks a place far better than its code (the right location is among the
+// first 15 codes for 94 % of lip6 frames). The codes rank each location by its centred cosine
+// averaged over its traversal neighbours (place_index.h, place_neighbourhood.h), and when no
+// candidate passes the check, further down that ranking before the answer is "unknown". Each
+// candidate goes through the mapping's geometric check against its own stored keypoints, and
+// so do the locations within two links of the best one that passes (again around a neighbour
+// that beats it, until the best stays the same); the verdict is "known" when the best candidate
+// passes it (the mapping's geometry rule), "unknown" when none does. A place never seen still
+// finds look-alike candidates, but their matches do not agree on one epipolar geometry, so it
+// is reported unknown instead of as its nearest look-alike.
 #include <algorithm>
 #include <chrono>
 #include <map>
@@ -28,8 +34,17 @@ namespace {
 // within the first 15 codes where it misses the first 5 (bench/quality/README.md).
 constexpr std::size_t kWordCandidates = 5;
 constexpr std::size_t kCodeCandidates = 15;
+// When none of the candidates passes, the code ranking is checked further, a batch of
+// kCodeCandidates at a time, up to this many batches in all: a query that finds nothing costs
+// up to 4 times the checks before it answers "unknown". On the 100k-frame scale map, the
+// frames whose location ranked 16th to 55th were answered unknown with one batch.
+constexpr std::size_t kCodeBatches = 4;
 // Links around the best verified candidate whose locations are checked too.
 constexpr int kNeighbourDepth = 2;
+// Words a localisation map may hold in RAM (64 floats each: 256 MB, plus the kd-forest's
+// nodes) for its LTM locations to be searched by their words. The file keeps every word ever
+// made, so its largest word id bounds them; a larger map searches LTM by place codes only.
+constexpr std::int64_t kQueryWordBudget = 1000000;
 
 }  // namespace
 
@@ -43,6 +58,36 @@ const char* toString(QueryVerdict verdict) {
       return "unverified";
   }
   return "unknown";
+}
+
+void MapImpl::loadLtmWords() {
+  ltm_words_.emplace();
+  if (tiers_->ltmSize() == 0) return;
+  const auto max_word = store_->maxWordId();
+  if (!max_word || *max_word >= kQueryWordBudget) return;
+  const std::vector<std::int64_t> ltm = tiers_->ltm();
+  auto words = store_->loadWordIds(ltm);
+  std::vector<std::int64_t> missing;
+  for (std::int64_t id : ltm) {
+    for (std::int64_t word : words[id])
+      if (!vocabulary_->contains(word)) missing.push_back(word);
+    ltm_words_->add(id, Signature::fromWords(std::move(words[id])));
+  }
+  std::sort(missing.begin(), missing.end());
+  missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
+  if (missing.empty()) return;
+  cv::Mat descriptors(static_cast<int>(missing.size()), vocabulary_->dim(), CV_32F);
+  std::vector<std::int64_t> created(missing.size());
+  store_->loadFloatDescriptors(missing, vocabulary_->dim(), descriptors.ptr<float>(),
+                               created.data());
+  vocabulary_->insert(missing, descriptors, created);
+}
+
+void MapImpl::loadPlaceNeighbourhood() {
+  std::vector<std::pair<std::int64_t, std::int64_t>> links;
+  for (const auto& l : store_->linksOfType(storage::LinkType::kNeighbour))
+    links.emplace_back(l.location_a, l.location_b);
+  place_neighbourhood_.emplace(places_, links);
 }
 
 QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
@@ -59,6 +104,7 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
   // Nearest words only: in localisation mode the vocabulary is fixed, so nothing is created.
   if (!vocabulary_->options().fixed)
     throw Error(ErrorCode::kInternal, "query() needs a map opened in localisation mode");
+  if (!ltm_words_) loadLtmWords();
   vocab::Quantization q = vocabulary_->quantize(features.descriptors, 0);
   std::vector<WordId> words;
   for (std::int64_t id : q.word_of_feature)
@@ -68,22 +114,36 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
   const std::size_t wanted = std::max(top_k, kWordCandidates);
   std::map<LocationId, QueryMatch> candidates;
   auto sims = index_.similarities(signature);
+  const auto ltm_sims = ltm_words_->similarities(signature);
+  sims.insert(sims.end(), ltm_sims.begin(), ltm_sims.end());
   result.searched = sims.size();
-  std::stable_sort(sims.begin(), sims.end(),
-                   [](const auto& a, const auto& b) { return a.similarity > b.similarity; });
+  // Equal similarities: the smaller location id first, whichever tier holds it.
+  std::sort(sims.begin(), sims.end(), [](const auto& a, const auto& b) {
+    return a.similarity != b.similarity ? a.similarity > b.similarity : a.location < b.location;
+  });
   for (std::size_t i = 0; i < sims.size(); ++i) {
     if (i < wanted) candidates[sims[i].location].location_id = sims[i].location;
     auto it = candidates.find(sims[i].location);
     if (it != candidates.end()) it->second.similarity = sims[i].similarity;
   }
   std::vector<std::int8_t> code;
+  std::vector<LocationId> further;  // code matches below the first batch, best first
   if (coder_ && features.descriptors.type() == CV_32F) {
     code = coder_->encode(features.descriptors);
     result.searched = std::max(result.searched, places_.size());
-    for (const PlaceMatch& m :
-         places_.search(code, std::max(top_k, kCodeCandidates),
-                        [this](LocationId id) { return tiers_->contains(id); }))
-      candidates[m.location].location_id = m.location;
+    // Ranked by neighbourhood, more than one batch deep: the batches after the first are
+    // checked only when nothing in the first passes.
+    const std::size_t batch = std::max(top_k, kCodeCandidates);
+    if (!place_neighbourhood_) loadPlaceNeighbourhood();
+    const auto ranked =
+        place_neighbourhood_->search(places_.centredSimilarities(code), batch * kCodeBatches,
+                                     [this](LocationId id) { return tiers_->contains(id); });
+    for (std::size_t i = 0; i < ranked.size(); ++i) {
+      if (i < batch)
+        candidates[ranked[i].location].location_id = ranked[i].location;
+      else
+        further.push_back(ranked[i].location);
+    }
   }
 
   std::vector<LocationId> ids;
@@ -115,6 +175,24 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
       }
     };
     check(ids);
+    // Nothing passed: before answering "unknown", the next batch down the code ranking.
+    const std::size_t batch = std::max(top_k, kCodeCandidates);
+    for (std::size_t from = 0; from < further.size(); from += batch) {
+      if (std::any_of(candidates.begin(), candidates.end(),
+                      [](const auto& c) { return c.second.verified; }))
+        break;
+      std::vector<LocationId> next;
+      for (std::size_t i = from; i < std::min(further.size(), from + batch); ++i) {
+        const LocationId id = further[i];
+        if (candidates.count(id)) continue;
+        QueryMatch& match = candidates[id];
+        match.location_id = id;
+        match.tier = tiers_->contains(id) ? tiers_->tierOf(id) : Tier::kLtm;
+        match.code_similarity = places_.similarity(code, id);
+        next.push_back(id);
+      }
+      check(next);
+    }
     // The searches rank whole images; the best verified place's graph neighbours (any tier)
     // often see the query's viewpoint better still, as the filter's neighbours do in mapping.
     // Climbs: when a neighbour beats the best, its own neighbourhood is checked in turn.

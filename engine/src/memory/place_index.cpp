@@ -27,6 +27,11 @@ void PlaceIndex::add(std::int64_t location, const std::vector<std::int8_t>& code
                                                  " has " + std::to_string(code.size()) +
                                                  " values, the index " + std::to_string(dim_));
   auto [it, added] = row_.emplace(location, ids_.size());
+  centre_.reset();
+  if (sum_.size() != dim_) sum_.assign(dim_, 0);
+  if (!added)
+    for (std::size_t d = 0; d < dim_; ++d) sum_[d] -= codes_[it->second * dim_ + d];
+  for (std::size_t d = 0; d < dim_; ++d) sum_[d] += code[d];
   if (added) {
     ids_.push_back(location);
     codes_.insert(codes_.end(), code.begin(), code.end());
@@ -43,6 +48,50 @@ void PlaceIndex::clear() {
   codes_.clear();
   norms_.clear();
   row_.clear();
+  sum_.clear();
+  centre_.reset();
+}
+
+const PlaceIndex::Centre& PlaceIndex::centre() const {
+  if (centre_) return *centre_;
+  Centre c;
+  const double n = double(ids_.size());
+  c.mean.resize(dim_);
+  for (std::size_t d = 0; d < dim_; ++d) c.mean[d] = double(sum_[d]) / n;
+  for (double m : c.mean) c.mean_norm2 += m * m;
+  c.dot_mean.resize(ids_.size());
+  c.centred_norm.resize(ids_.size());
+  for (std::size_t row = 0; row < ids_.size(); ++row) {
+    const std::int8_t* x = codes_.data() + row * dim_;
+    double dot = 0;
+    for (std::size_t d = 0; d < dim_; ++d) dot += c.mean[d] * x[d];
+    c.dot_mean[row] = dot;
+    // |x - m|^2 = |x|^2 - 2 x.m + |m|^2; rounding can leave a hair below 0 for x = m.
+    const double n2 = norms_[row] * norms_[row] - 2 * dot + c.mean_norm2;
+    c.centred_norm[row] = n2 > 1e-9 ? std::sqrt(n2) : 0.0;
+  }
+  centre_ = std::move(c);
+  return *centre_;
+}
+
+std::vector<double> PlaceIndex::centredSimilarities(const std::vector<std::int8_t>& code) const {
+  std::vector<double> out(ids_.size(), 0.0);
+  if (ids_.empty() || code.size() != dim_) return out;
+  const Centre& c = centre();
+  double q_mean = 0;
+  for (std::size_t d = 0; d < dim_; ++d) q_mean += c.mean[d] * code[d];
+  const double q_norm2 =
+      double(codeDot(code.data(), code.data(), dim_)) - 2 * q_mean + c.mean_norm2;
+  if (q_norm2 <= 1e-9) return out;
+  const double q_norm = std::sqrt(q_norm2);
+  // (x - m).(q - m) = x.q - q.m - x.m + |m|^2: one byte product per row, as for the cosine.
+  for (std::size_t row = 0; row < ids_.size(); ++row) {
+    if (c.centred_norm[row] == 0) continue;
+    const double dot = double(codeDot(codes_.data() + row * dim_, code.data(), dim_)) - q_mean -
+                       c.dot_mean[row] + c.mean_norm2;
+    out[row] = dot / (q_norm * c.centred_norm[row]);
+  }
+  return out;
 }
 
 double PlaceIndex::similarity(const std::vector<std::int8_t>& code, std::int64_t location) const {

@@ -5,6 +5,7 @@
 // 256 M byte products; see bench/quality/README.md for the measured cost.
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <unordered_map>
 #include <utility>
 #include <vector>
@@ -31,12 +32,37 @@ class PlaceIndex {
   // The cosine of `code` and the location's code; 0 when it has none.
   double similarity(const std::vector<std::int8_t>& code, std::int64_t location) const;
 
+  // The cosine of `code` and every location's code, both less the mean code of the index, by
+  // row (0 for a code equal to the mean). Codes share a large common part, the texture of the
+  // whole map: on the 100k-frame scale map two frames of one place a step apart have a cosine
+  // of 0.5, below hundreds of other places (0.6-0.7), and 0.28 centred, above all but a few
+  // dozen (bench/scale/README.md). Centring is the first step of whitening (Jégou and Chum
+  // 2012); the mean is the index's own, so nothing is tuned to a map.
+  std::vector<double> centredSimilarities(const std::vector<std::int8_t>& code) const;
+  std::int64_t idAt(std::size_t row) const { return ids_[row]; }
+  // The row of a location's code, or size() when it has none.
+  std::size_t rowOf(std::int64_t location) const {
+    auto it = row_.find(location);
+    return it == row_.end() ? ids_.size() : it->second;
+  }
+
  private:
   std::size_t dim_ = 0;
   std::vector<std::int64_t> ids_;
   std::vector<std::int8_t> codes_;  // ids_.size() x dim_
   std::vector<double> norms_;
   std::unordered_map<std::int64_t, std::size_t> row_;
+  std::vector<std::int64_t> sum_;  // of every code, dim_ values: exact whatever the order
+
+  // The mean code and, per row, its dot product with the mean and its centred norm: rebuilt by
+  // the first centred search after a change (one pass over the codes).
+  struct Centre {
+    std::vector<double> mean;
+    double mean_norm2 = 0;
+    std::vector<double> dot_mean, centred_norm;
+  };
+  const Centre& centre() const;
+  mutable std::optional<Centre> centre_;
 };
 
 }  // namespace placedb

@@ -159,6 +159,8 @@ class MapStore {
   // Links, stored once per unordered pair and type; inserting again updates the score.
   void insertLink(std::int64_t a, std::int64_t b, LinkType type, std::optional<double> score);
   std::vector<LinkRecord> links(std::int64_t location_id) const;
+  // Every link of one type, by (location_a, location_b).
+  std::vector<LinkRecord> linksOfType(LinkType type) const;
   std::int64_t linkCount(LinkType type) const;
   // Locations linked to `location_id` (by `type`, or any link) that sit in `tier`, ascending.
   std::vector<std::int64_t> linkedInTier(std::int64_t location_id, Tier tier,
