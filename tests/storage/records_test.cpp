@@ -326,8 +326,8 @@ TEST_F(Records, HypothesesStateAndVocabularyImports) {
     store_->insertFrame(f);
   }
   store_->insertLocation({1, session_, 0, Tier::kWm, 1});
-  store_->insertHypothesis({1, std::nullopt, 0.3, 0.0, false, "below T_loop"});
-  store_->insertHypothesis({2, std::int64_t{1}, 0.8, 0.75, true, ""});
+  store_->insertHypothesis({1, std::nullopt, 0.3, 0.0, false, "below T_loop", std::nullopt});
+  store_->insertHypothesis({2, std::int64_t{1}, 0.8, 0.75, true, "", std::nullopt});
   tx.commit();
   const auto rejected = store_->hypothesis(1);
   ASSERT_TRUE(rejected);

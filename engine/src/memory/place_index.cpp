@@ -85,11 +85,17 @@ std::vector<double> PlaceIndex::centredSimilarities(const std::vector<std::int8_
   if (q_norm2 <= 1e-9) return out;
   const double q_norm = std::sqrt(q_norm2);
   // (x - m).(q - m) = x.q - q.m - x.m + |m|^2: one byte product per row, as for the cosine.
-  for (std::size_t row = 0; row < ids_.size(); ++row) {
-    if (c.centred_norm[row] == 0) continue;
-    const double dot = double(codeDot(codes_.data() + row * dim_, code.data(), dim_)) - q_mean -
-                       c.dot_mean[row] + c.mean_norm2;
-    out[row] = dot / (q_norm * c.centred_norm[row]);
+  constexpr std::size_t kBlock = 1024;
+  std::int32_t dots[kBlock];
+  for (std::size_t start = 0; start < ids_.size(); start += kBlock) {
+    const std::size_t rows = std::min(kBlock, ids_.size() - start);
+    codeDots(code.data(), codes_.data() + start * dim_, rows, dim_, dots);
+    for (std::size_t i = 0; i < rows; ++i) {
+      const std::size_t row = start + i;
+      if (c.centred_norm[row] == 0) continue;
+      const double dot = double(dots[i]) - q_mean - c.dot_mean[row] + c.mean_norm2;
+      out[row] = dot / (q_norm * c.centred_norm[row]);
+    }
   }
   return out;
 }
