@@ -18,6 +18,20 @@ bool better(const PlaceMatch& a, const PlaceMatch& b) {
   return a.similarity != b.similarity ? a.similarity > b.similarity : a.location < b.location;
 }
 
+// The byte products of `code` with each of `count` stored codes, a block of rows at a time
+// (codeDots), handed to visit(row, product) in row order.
+template <typename Visit>
+void eachProduct(const std::int8_t* code, const std::int8_t* codes, std::size_t count,
+                 std::size_t dim, Visit&& visit) {
+  constexpr std::size_t kBlock = 1024;
+  std::int32_t dots[kBlock];
+  for (std::size_t start = 0; start < count; start += kBlock) {
+    const std::size_t rows = std::min(kBlock, count - start);
+    codeDots(code, codes + start * dim, rows, dim, dots);
+    for (std::size_t i = 0; i < rows; ++i) visit(start + i, dots[i]);
+  }
+}
+
 }  // namespace
 
 void PlaceIndex::add(std::int64_t location, const std::vector<std::int8_t>& code) {
@@ -85,18 +99,12 @@ std::vector<double> PlaceIndex::centredSimilarities(const std::vector<std::int8_
   if (q_norm2 <= 1e-9) return out;
   const double q_norm = std::sqrt(q_norm2);
   // (x - m).(q - m) = x.q - q.m - x.m + |m|^2: one byte product per row, as for the cosine.
-  constexpr std::size_t kBlock = 1024;
-  std::int32_t dots[kBlock];
-  for (std::size_t start = 0; start < ids_.size(); start += kBlock) {
-    const std::size_t rows = std::min(kBlock, ids_.size() - start);
-    codeDots(code.data(), codes_.data() + start * dim_, rows, dim_, dots);
-    for (std::size_t i = 0; i < rows; ++i) {
-      const std::size_t row = start + i;
-      if (c.centred_norm[row] == 0) continue;
-      const double dot = double(dots[i]) - q_mean - c.dot_mean[row] + c.mean_norm2;
-      out[row] = dot / (q_norm * c.centred_norm[row]);
-    }
-  }
+  eachProduct(code.data(), codes_.data(), ids_.size(), dim_,
+              [&](std::size_t row, std::int32_t product) {
+                if (c.centred_norm[row] == 0) return;
+                const double dot = double(product) - q_mean - c.dot_mean[row] + c.mean_norm2;
+                out[row] = dot / (q_norm * c.centred_norm[row]);
+              });
   return out;
 }
 
@@ -116,31 +124,25 @@ std::vector<PlaceMatch> PlaceIndex::search(const std::vector<std::int8_t>& code,
   const double query_norm = norm(code.data(), dim_);
   if (query_norm == 0) return best;
   best.reserve(k + 1);
-  // The dot products a block of rows at a time (codeDots), then each row's cosine only where it
-  // may enter the k best: its product is at least the k-th cosine times the two norms, less a
-  // margin far above the rounding of either side. The cosines kept are the exact expression's.
-  constexpr std::size_t kBlock = 1024;
-  std::int32_t dots[kBlock];
-  for (std::size_t start = 0; start < ids_.size(); start += kBlock) {
-    const std::size_t rows = std::min(kBlock, ids_.size() - start);
-    codeDots(code.data(), codes_.data() + start * dim_, rows, dim_, dots);
-    for (std::size_t i = 0; i < rows; ++i) {
-      const std::size_t row = start + i;
-      if (norms_[row] == 0) continue;
-      if (best.size() == k) {
-        const double scale = norms_[row] * query_norm;
-        const double bar = best.back().similarity * scale;
-        if (double(dots[i]) < bar - 1e-9 * (std::abs(bar) + scale)) continue;
-      }
-      const PlaceMatch m{ids_[row], double(dots[i]) / (norms_[row] * query_norm)};
-      if (best.size() == k && !better(m, best.back())) continue;
-      // Asked only of the few rows that would enter the k best: on a large map the caller's
-      // test (a tier lookup) costs more than the dot product.
-      if (!admit(ids_[row])) continue;
-      best.insert(std::upper_bound(best.begin(), best.end(), m, better), m);
-      if (best.size() > k) best.pop_back();
-    }
-  }
+  // Each row's cosine only where it may enter the k best: its product is at least the k-th
+  // cosine times the two norms, less a margin far above the rounding of either side. The
+  // cosines kept are the exact expression's.
+  eachProduct(code.data(), codes_.data(), ids_.size(), dim_,
+              [&](std::size_t row, std::int32_t product) {
+                if (norms_[row] == 0) return;
+                if (best.size() == k) {
+                  const double scale = norms_[row] * query_norm;
+                  const double bar = best.back().similarity * scale;
+                  if (double(product) < bar - 1e-9 * (std::abs(bar) + scale)) return;
+                }
+                const PlaceMatch m{ids_[row], double(product) / (norms_[row] * query_norm)};
+                if (best.size() == k && !better(m, best.back())) return;
+                // Asked only of the few rows that would enter the k best: on a large map the
+                // caller's test (a tier lookup) costs more than the dot product.
+                if (!admit(ids_[row])) return;
+                best.insert(std::upper_bound(best.begin(), best.end(), m, better), m);
+                if (best.size() > k) best.pop_back();
+              });
   return best;
 }
 
