@@ -125,6 +125,9 @@ class MapImpl final : public Map {
   void retrieveNeighbours(std::int64_t hypothesis, FrameWrite& write, FrameResult& result);
   // Moves LTM locations back to WM: signatures, missing words, links, ages.
   void bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write, FrameResult& result);
+  // Words of the file that the vocabulary lacks go back into it with their stored descriptors
+  // (repeats allowed).
+  void restoreWords(std::vector<std::int64_t> missing);
   void storePlaceCode(std::int64_t location_id, const Features& features, FrameWrite& write);
   const std::vector<std::int8_t>& frameCode(const Features& features);
   void transferToLtm(std::int64_t hypothesis, double frame_seconds, FrameWrite& write,

@@ -350,6 +350,17 @@ void MapImpl::searchLongTermMemory(const Features& features, FrameWrite& write,
   searched_back_ = std::move(ids);  // loop candidates of this frame (candidate_choice.h)
 }
 
+void MapImpl::restoreWords(std::vector<std::int64_t> missing) {
+  std::sort(missing.begin(), missing.end());
+  missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
+  if (missing.empty()) return;
+  cv::Mat descriptors(static_cast<int>(missing.size()), vocabulary_->dim(), CV_32F);
+  std::vector<std::int64_t> created(missing.size());
+  store_->loadFloatDescriptors(missing, vocabulary_->dim(), descriptors.ptr<float>(),
+                               created.data());
+  vocabulary_->insert(missing, descriptors, created);
+}
+
 void MapImpl::bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write,
                         FrameResult& result) {
   if (ids.empty()) return;
@@ -362,15 +373,7 @@ void MapImpl::bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write,
     for (WordId word : index_.add(id, Signature::fromWords(std::move(words))).referenced)
       if (!vocabulary_->contains(word)) missing.push_back(word);
   }
-  std::sort(missing.begin(), missing.end());
-  missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
-  if (!missing.empty()) {
-    cv::Mat descriptors(static_cast<int>(missing.size()), vocabulary_->dim(), CV_32F);
-    std::vector<std::int64_t> created(missing.size());
-    store_->loadFloatDescriptors(missing, vocabulary_->dim(), descriptors.ptr<float>(),
-                                 created.data());
-    vocabulary_->insert(missing, descriptors, created);
-  }
+  restoreWords(std::move(missing));
   for (std::int64_t id : ids) {
     graph_.addNode(id);
     for (const auto& l : store_->links(id)) {

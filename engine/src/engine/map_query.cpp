@@ -73,14 +73,7 @@ void MapImpl::loadLtmWords() {
       if (!vocabulary_->contains(word)) missing.push_back(word);
     ltm_words_->add(id, Signature::fromWords(std::move(words[id])));
   }
-  std::sort(missing.begin(), missing.end());
-  missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
-  if (missing.empty()) return;
-  cv::Mat descriptors(static_cast<int>(missing.size()), vocabulary_->dim(), CV_32F);
-  std::vector<std::int64_t> created(missing.size());
-  store_->loadFloatDescriptors(missing, vocabulary_->dim(), descriptors.ptr<float>(),
-                               created.data());
-  vocabulary_->insert(missing, descriptors, created);
+  restoreWords(std::move(missing));
 }
 
 void MapImpl::loadPlaceNeighbourhood() {
