@@ -105,6 +105,7 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
   Signature signature = Signature::fromWords(std::move(words));
 
   const std::size_t wanted = std::max(top_k, kWordCandidates);
+  const std::size_t batch = std::max(top_k, kCodeCandidates);  // code candidates per round
   std::map<LocationId, QueryMatch> candidates;
   auto sims = index_.similarities(signature);
   const auto ltm_sims = ltm_words_->similarities(signature);
@@ -126,7 +127,6 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
     result.searched = std::max(result.searched, places_.size());
     // Ranked by neighbourhood, more than one batch deep: the batches after the first are
     // checked only when nothing in the first passes.
-    const std::size_t batch = std::max(top_k, kCodeCandidates);
     if (!place_neighbourhood_) loadPlaceNeighbourhood();
     const auto ranked =
         place_neighbourhood_->search(places_.centredSimilarities(code), batch * kCodeBatches,
@@ -139,12 +139,16 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
     }
   }
 
-  std::vector<LocationId> ids;
-  for (auto& [id, match] : candidates) {
-    ids.push_back(id);
+  // A candidate's entry: where it is held and how like the frame its code is.
+  const auto enter = [&](LocationId id) {
+    QueryMatch& match = candidates[id];
+    match.location_id = id;
     match.tier = tiers_->contains(id) ? tiers_->tierOf(id) : Tier::kLtm;
     if (!code.empty()) match.code_similarity = places_.similarity(code, id);
-  }
+  };
+  std::vector<LocationId> ids;
+  for (const auto& [id, match] : candidates) ids.push_back(id);
+  for (LocationId id : ids) enter(id);
 
   if (check_on) {
     GeometricView view;
@@ -169,7 +173,6 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
     };
     check(ids);
     // Nothing passed: before answering "unknown", the next batch down the code ranking.
-    const std::size_t batch = std::max(top_k, kCodeCandidates);
     for (std::size_t from = 0; from < further.size(); from += batch) {
       if (std::any_of(candidates.begin(), candidates.end(),
                       [](const auto& c) { return c.second.verified; }))
@@ -178,10 +181,7 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
       for (std::size_t i = from; i < std::min(further.size(), from + batch); ++i) {
         const LocationId id = further[i];
         if (candidates.count(id)) continue;
-        QueryMatch& match = candidates[id];
-        match.location_id = id;
-        match.tier = tiers_->contains(id) ? tiers_->tierOf(id) : Tier::kLtm;
-        match.code_similarity = places_.similarity(code, id);
+        enter(id);
         next.push_back(id);
       }
       check(next);
@@ -209,12 +209,7 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
           }
         frontier = std::move(next);
       }
-      for (LocationId id : around) {
-        QueryMatch& match = candidates[id];
-        match.location_id = id;
-        match.tier = tiers_->contains(id) ? tiers_->tierOf(id) : Tier::kLtm;
-        if (!code.empty()) match.code_similarity = places_.similarity(code, id);
-      }
+      for (LocationId id : around) enter(id);
       check(around);
     }
   }
