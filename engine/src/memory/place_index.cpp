@@ -34,6 +34,14 @@ void eachProduct(const std::int8_t* code, const std::int8_t* codes, std::size_t 
 
 }  // namespace
 
+void offerMatch(std::vector<PlaceMatch>& best, std::size_t k, const PlaceMatch& m,
+                const std::function<bool(std::int64_t)>& admit) {
+  if (best.size() == k && !better(m, best.back())) return;
+  if (!admit(m.location)) return;
+  best.insert(std::upper_bound(best.begin(), best.end(), m, better), m);
+  if (best.size() > k) best.pop_back();
+}
+
 void PlaceIndex::add(std::int64_t location, const std::vector<std::int8_t>& code) {
   if (ids_.empty()) dim_ = code.size();
   if (code.size() != dim_ || dim_ == 0)
@@ -127,22 +135,16 @@ std::vector<PlaceMatch> PlaceIndex::search(const std::vector<std::int8_t>& code,
   // Each row's cosine only where it may enter the k best: its product is at least the k-th
   // cosine times the two norms, less a margin far above the rounding of either side. The
   // cosines kept are the exact expression's.
-  eachProduct(code.data(), codes_.data(), ids_.size(), dim_,
-              [&](std::size_t row, std::int32_t product) {
-                if (norms_[row] == 0) return;
-                if (best.size() == k) {
-                  const double scale = norms_[row] * query_norm;
-                  const double bar = best.back().similarity * scale;
-                  if (double(product) < bar - 1e-9 * (std::abs(bar) + scale)) return;
-                }
-                const PlaceMatch m{ids_[row], double(product) / (norms_[row] * query_norm)};
-                if (best.size() == k && !better(m, best.back())) return;
-                // Asked only of the few rows that would enter the k best: on a large map the
-                // caller's test (a tier lookup) costs more than the dot product.
-                if (!admit(ids_[row])) return;
-                best.insert(std::upper_bound(best.begin(), best.end(), m, better), m);
-                if (best.size() > k) best.pop_back();
-              });
+  eachProduct(
+      code.data(), codes_.data(), ids_.size(), dim_, [&](std::size_t row, std::int32_t product) {
+        if (norms_[row] == 0) return;
+        if (best.size() == k) {
+          const double scale = norms_[row] * query_norm;
+          const double bar = best.back().similarity * scale;
+          if (double(product) < bar - 1e-9 * (std::abs(bar) + scale)) return;
+        }
+        offerMatch(best, k, {ids_[row], double(product) / (norms_[row] * query_norm)}, admit);
+      });
   return best;
 }
 

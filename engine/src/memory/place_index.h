@@ -17,6 +17,12 @@ struct PlaceMatch {
   double similarity = 0.0;  // cosine of the two codes
 };
 
+// Offers m to `best`, the k best so far (most similar first, the smaller id first on ties):
+// kept when it ranks among them and `admit` accepts it. `admit` is asked only then, since on a
+// large map the caller's test (a tier lookup) costs more than a comparison.
+void offerMatch(std::vector<PlaceMatch>& best, std::size_t k, const PlaceMatch& m,
+                const std::function<bool(std::int64_t)>& admit);
+
 class PlaceIndex {
  public:
   // Adds or replaces a location's code; every code of one index has the same length.

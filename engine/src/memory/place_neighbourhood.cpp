@@ -3,13 +3,6 @@
 #include <algorithm>
 
 namespace placedb {
-namespace {
-
-bool better(const PlaceMatch& a, const PlaceMatch& b) {
-  return a.similarity != b.similarity ? a.similarity > b.similarity : a.location < b.location;
-}
-
-}  // namespace
 
 PlaceNeighbourhood::PlaceNeighbourhood(
     const PlaceIndex& index, const std::vector<std::pair<std::int64_t, std::int64_t>>& links)
@@ -42,11 +35,7 @@ std::vector<PlaceMatch> PlaceNeighbourhood::search(
   for (std::size_t r = 0; r < n; ++r) {
     double sum = likeness[r];
     for (std::size_t i = first_[r]; i < first_[r + 1]; ++i) sum += likeness[rows_[i]];
-    const PlaceMatch m{index_.idAt(r), sum / double(1 + first_[r + 1] - first_[r])};
-    if (best.size() == k && !better(m, best.back())) continue;
-    if (!admit(m.location)) continue;
-    best.insert(std::upper_bound(best.begin(), best.end(), m, better), m);
-    if (best.size() > k) best.pop_back();
+    offerMatch(best, k, {index_.idAt(r), sum / double(1 + first_[r + 1] - first_[r])}, admit);
   }
   return best;
 }
