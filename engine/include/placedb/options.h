@@ -98,14 +98,16 @@ struct Options {
 
   // --- temporal consistency (iBoW-LCD's islands; RTAB-Map's closures that follow the graph) ---
   // A hypothesis that misses the check's rule still passes a relaxed one (temporal_min_inliers,
-  // or temporal_max_nfa and temporal_min_overlap) when it lies within temporal_radius WM links
-  // of the location accepted as loop closure at most temporal_max_gap frames before; those
+  // or temporal_max_nfa and temporal_min_overlap) when it continues the run of loop closures the
+  // camera is making (engine/src/engine/closure_run.h): within temporal_radius WM links of the
+  // run's last closure that passed on its own, on the next frame; up to temporal_max_gap frames
+  // later, within temporal_radius + gap - 1 links ahead of it in the run's heading. Those
   // locations are checked as candidates too.
   int temporal_min_inliers = 7;         // inliers rule (and either); 0 = off
   double temporal_max_nfa = 100;        // nfa rule (and either); 0 = off
   double temporal_min_overlap = 0.025;  // nfa rule (and either)
-  int temporal_radius = 2;              // links from the last accepted closure
-  int temporal_max_gap = 1;             // frames since the last accepted closure (1 = previous)
+  int temporal_radius = 2;              // links from the last closure that passed on its own
+  int temporal_max_gap = 4;             // frames since that closure (1 = the previous frame's)
 
   // --- camera intrinsics (optional) ---
   // The pinhole camera of the images as they are mapped, in pixels: all four or none (0 =

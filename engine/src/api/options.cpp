@@ -231,11 +231,13 @@ const std::vector<Row>& table() {
       real("temporal_min_overlap", &Options::temporal_min_overlap, 0, 1, "0..1",
            "nfa rule: inliers' share of the keypoints that such a hypothesis needs"),
       integer("temporal_radius", &Options::temporal_radius, 0, 100, "0..100",
-              "WM links from the last accepted loop closure within which the relaxed rule "
-              "applies; those locations are also checked as candidates"),
-      integer("temporal_max_gap", &Options::temporal_max_gap, 1, 100000, "1..100000",
-              "frames since the last accepted loop closure for the relaxed rule to apply "
-              "(1 = the previous frame's)"),
+              "WM links from the last loop closure that passed on its own within which the "
+              "relaxed rule applies on the next frame; those locations are also checked as "
+              "candidates"),
+      integer("temporal_max_gap", &Options::temporal_max_gap, 1, 100, "1..100",
+              "frames after that closure for which the relaxed rule still applies, later frames "
+              "reaching temporal_radius + gap - 1 links ahead in the direction the closures "
+              "move (1 = the next frame only)"),
       real("fx", &Options::fx, 0, 1e6, "0..1e6",
            "camera focal length along x in pixels; fx fy cx cy all four or none (0 = unknown): "
            "with them every accepted loop closure also stores its relative pose"),

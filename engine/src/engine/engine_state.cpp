@@ -23,9 +23,11 @@ void EngineCounters::save(storage::MapStore& store) const {
                       {"last_location", last_location},
                       {"last_session", last_session},
                       {"previous_score", previous_score},
-                      {"last_closure_location", last_closure_location},
-                      {"last_closure_frame", last_closure_frame},
-                      {"last_closure_session", last_closure_session},
+                      {"last_closure_location", closure_run.anchor},
+                      {"last_closure_frame", closure_run.frame},
+                      {"last_closure_session", closure_run.session},
+                      {"closure_run_first", closure_run.first},
+                      {"closure_run_heading", closure_run.heading},
                       {"next_wm_age", next_wm_age}};
   store.putState(kCountersKey, j.dump());
 }
@@ -43,9 +45,12 @@ bool EngineCounters::load(const storage::MapStore& store) {
     last_session = j.at("last_session").get<std::int64_t>();
     previous_score = j.at("previous_score").get<double>();
     // Absent from maps made before temporal consistency: no closure to continue from.
-    last_closure_location = j.value("last_closure_location", std::int64_t{0});
-    last_closure_frame = j.value("last_closure_frame", std::int64_t{0});
-    last_closure_session = j.value("last_closure_session", std::int64_t{0});
+    closure_run.anchor = j.value("last_closure_location", std::int64_t{0});
+    closure_run.frame = j.value("last_closure_frame", std::int64_t{0});
+    closure_run.session = j.value("last_closure_session", std::int64_t{0});
+    // Absent from maps made before runs had a heading: a run of one closure.
+    closure_run.first = j.value("closure_run_first", closure_run.anchor);
+    closure_run.heading = j.value("closure_run_heading", 0);
     // Absent from maps made before schema 4, whose ages were the location ids.
     next_wm_age = j.value("next_wm_age", next_location_id);
   } catch (const nlohmann::json::exception& e) {

@@ -86,8 +86,6 @@ class MapImpl final : public Map {
                                  const Quantised& q,
                                  const std::vector<LocationSimilarity>& similarities,
                                  FrameResult& result, FrameWrite& write, StageTimes& times);
-  void acceptLoopClosure(std::int64_t hypothesis, bool temporal, FrameResult& result,
-                         FrameWrite& write);
   // An accepted closure's relative pose when this session and the hypothesis' have intrinsics.
   std::optional<storage::ClosurePose> closurePose(std::int64_t hypothesis,
                                                   const GeometricResult& geometry);
@@ -104,18 +102,23 @@ class MapImpl final : public Map {
     std::int64_t location = 0;  // kNewPlace (-1) when there is none
     bool passed = false;        // the geometric check (or no check) let it through
     int inliers = 0;
-    int matches = 0;           // descriptor matches behind the inliers
-    bool temporal = false;     // passed on temporal_max_nfa, near the last accepted closure
-    int checked = 0;           // candidates the check ran on
-    double log10_nfa = 0;      // the reported candidate's number of false alarms, log10
-    GeometricResult geometry;  // the reported candidate's check (its agreeing pairs)
+    int matches = 0;             // descriptor matches behind the inliers
+    bool temporal = false;       // passed on the relaxed rule, near the last accepted closure
+    bool continues_run = false;  // lies within the reach of the closure run (closure_run.h)
+    int checked = 0;             // candidates the check ran on
+    double log10_nfa = 0;        // the reported candidate's number of false alarms, log10
+    GeometricResult geometry;    // the reported candidate's check (its agreeing pairs)
   };
+  // Links the frame's location to the accepted closure; one that passed on its own anchors the
+  // closure run (closure_run.h).
+  void acceptLoopClosure(std::int64_t hypothesis, const Verified& verified, FrameResult& result,
+                         FrameWrite& write);
   Verified verifyHypothesis(const FilterOutcome& outcome, const Features& features,
                             const std::vector<std::int64_t>& word_of_feature,
                             const std::vector<LocationSimilarity>& similarities,
                             std::int64_t frame_id);
-  // WM locations within temporal_radius links of the last accepted loop closure, sorted; empty
-  // when temporal consistency is off or that closure is too old or from another session.
+  // The WM locations that continue the closure run at this frame (closure_run.h), sorted; empty
+  // when temporal consistency is off or the frame continues no run.
   std::vector<LocationId> nearLastClosure(std::int64_t frame_id) const;
   // The relaxed rule (temporal_*) for a candidate near the last accepted closure.
   bool passesNearLastClosure(const GeometricResult& g) const;

@@ -235,7 +235,7 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
     r.hypothesis.score = vetoed ? 0.0 : outcome.score;
     if (r.hypothesis.accepted) {
       r.hypothesis.pose = pose;
-      acceptLoopClosure(hypothesis, verified.temporal, r, w);
+      acceptLoopClosure(hypothesis, verified, r, w);
     }
     if (!r.hypothesis.accepted) {
       reason = verified.passed
@@ -259,15 +259,14 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
   return hypothesis;
 }
 
-void MapImpl::acceptLoopClosure(std::int64_t hypothesis, bool temporal, FrameResult& r,
+void MapImpl::acceptLoopClosure(std::int64_t hypothesis, const Verified& verified, FrameResult& r,
                                 FrameWrite& w) {
   // Only a closure that passed on its own anchors the next ones: chains of temporal
   // acceptances would drift along the graph while the camera moves on.
-  if (!temporal) {
-    counters_.last_closure_location = hypothesis;
-    counters_.last_closure_frame = r.frame_id;
-    counters_.last_closure_session = r.session_id;
-  }
+  if (!verified.temporal)
+    counters_.closure_run =
+        anchorAt(counters_.closure_run, hypothesis, r.frame_id, r.session_id,
+                 verified.continues_run, {options_.temporal_radius, options_.temporal_max_gap});
   if (hypothesis != r.location_id) {
     w.links.push_back(
         link(r.location_id, hypothesis, storage::LinkType::kLoopClosure, r.hypothesis.score));

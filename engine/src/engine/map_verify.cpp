@@ -85,18 +85,18 @@ std::vector<LocationId> MapImpl::nearLastClosure(std::int64_t frame_id) const {
   const bool relaxed =
       (options_.geometry_rule != GeometryRule::kNfa && options_.temporal_min_inliers > 0) ||
       (options_.geometry_rule != GeometryRule::kInliers && options_.temporal_max_nfa > 0);
-  if (!relaxed || !geometricCheckOn(options_) || counters_.last_closure_location == 0) return {};
-  if (counters_.last_closure_session != *session_id_ ||
-      frame_id - counters_.last_closure_frame > options_.temporal_max_gap)
-    return {};
+  if (!relaxed || !geometricCheckOn(options_)) return {};
+  const ClosureRun& run = counters_.closure_run;
+  const std::optional<RunReach> reach =
+      reachOf(run, frame_id, *session_id_, {options_.temporal_radius, options_.temporal_max_gap});
+  if (!reach) return {};
   std::vector<LocationId> near;
   const auto inWm = [this](LocationId id) { return tiers_->isIn(id, Tier::kWm); };
   // Along the traversal only: through a loop-closure link the walk would reach another visit of
   // the place, whose offset from this one adds to the closure's own.
   for (const auto& [id, depth] :
-       graph_.withinLinks(counters_.last_closure_location, options_.temporal_radius, inWm,
-                          LinkWalk::kNeighbourLinksOnly))
-    near.push_back(id);  // sorted by id
+       graph_.withinLinks(run.anchor, reach->links, inWm, LinkWalk::kNeighbourLinksOnly))
+    if (reach->admits(run.anchor, id)) near.push_back(id);  // sorted by id
   return near;
 }
 
@@ -184,6 +184,7 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
     v.geometry = *choice.result;
     v.passed = choice.passed;
     v.temporal = choice.temporal;
+    v.continues_run = std::binary_search(near.begin(), near.end(), choice.location);
     v.inliers = choice.result->inliers;
     v.matches = choice.result->matches;
     v.log10_nfa = std::min(choice.result->log10_nfa, kNoModel);

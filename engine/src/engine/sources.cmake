@@ -1,5 +1,6 @@
 target_sources(placedb_engine PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/candidate_choice.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/closure_run.cpp
   ${CMAKE_CURRENT_LIST_DIR}/descriptor_match.cpp
   ${CMAKE_CURRENT_LIST_DIR}/engine_state.cpp
   ${CMAKE_CURRENT_LIST_DIR}/epipolar_fit.cpp
