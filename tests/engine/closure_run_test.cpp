@@ -50,7 +50,8 @@ TEST(ClosureRun, AGapReachesAheadOnlyAndFartherTheLongerItIs) {
   ASSERT_EQ(forward.heading, 1);
   for (std::int64_t gap = 2; gap <= kSettings.max_gap; ++gap) {
     SCOPED_TRACE("gap " + std::to_string(gap));
-    const std::optional<RunReach> reach = reachOf(forward, forward.frame + gap, kSession, kSettings);
+    const std::optional<RunReach> reach =
+        reachOf(forward, forward.frame + gap, kSession, kSettings);
     ASSERT_TRUE(reach);
     EXPECT_EQ(reach->links, kSettings.radius + gap - 1) << "the camera moved on meanwhile";
     EXPECT_TRUE(reach->admits(53, 53));
@@ -87,8 +88,8 @@ TEST(ClosureRun, AJumpStartsANewRunThatKeepsTheHeadingOnlyWhenItFollowsClosely) 
       anchorAt(runThrough({60, 59}), 56, run.frame + 2, kSession, true, kSettings);
   EXPECT_EQ(turned.heading, -1) << "beyond the radius from the run's first closure";
 
-  const ClosureRun later = anchorAt(run, 60, run.frame + kSettings.max_gap + 1, kSession, false,
-                                    kSettings);
+  const ClosureRun later =
+      anchorAt(run, 60, run.frame + kSettings.max_gap + 1, kSession, false, kSettings);
   EXPECT_EQ(later.heading, 0) << "after a break the camera may have turned";
   const ClosureRun elsewhere = anchorAt(run, 60, run.frame + 1, kSession + 1, false, kSettings);
   EXPECT_EQ(elsewhere.heading, 0);

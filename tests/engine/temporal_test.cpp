@@ -142,6 +142,66 @@ TEST_F(TemporalTest, ResumingJustBeforeAWeakClosureGivesTheSameResult) {
   }
 }
 
+// lip6_outdoor_160x128's first revisit has frames whose every candidate misses the check a frame
+// or two after the last closure that passed on its own: the closure run bridges them, they are
+// the right places, and a map reopened just before each of them decides exactly as a straight run.
+TEST(ClosureRunGaps, BridgedFramesAreRightAndResumeExactly) {
+  const auto dir = dataset("lip6_outdoor_160x128");
+  if (dir.empty()) GTEST_SKIP() << "no lip6_outdoor_160x128 under " << datasetsDir();
+  const Sequence seq = loadSequence(dir, 600);
+  std::map<std::int64_t, std::vector<std::int64_t>> truth;
+  {
+    std::ifstream gt(dir / "gt_pairs.txt");
+    std::string line;
+    while (std::getline(gt, line)) {
+      std::istringstream fields(line);
+      std::int64_t q, r;
+      if (!line.empty() && line[0] != '#' && fields >> q >> r) truth[q].push_back(r);
+    }
+  }
+  const Options options;
+  const auto run = [&](const std::string& name, const Options& o,
+                       const std::set<std::size_t>& stops) {
+    const auto path = scratchDir(name) / "map.placedb";
+    std::vector<FrameResult> out;
+    std::unique_ptr<Map> map;
+    for (std::size_t i = 0; i < seq.images.size(); ++i) {
+      if (!map) map = openForFrame(path, o, i, "lip6_outdoor_160x128");
+      out.push_back(map->process(seq.images[i], static_cast<std::int64_t>(i), seq.paths[i]));
+      if (stops.count(i)) map.reset();
+    }
+    return out;
+  };
+  const auto strong = [&](const FrameResult& r) {
+    return r.hypothesis.accepted &&
+           (r.hypothesis.inliers >= options.geometry_min_inliers ||
+            r.hypothesis.log10_nfa <= std::log10(options.geometry_max_nfa));
+  };
+  const auto straight = run("ClosureRunGaps_straight", options, {});
+  std::set<std::size_t> bridged, stops;
+  for (std::size_t i = 1; i < straight.size(); ++i)
+    if (straight[i].hypothesis.accepted && !strong(straight[i]) && !strong(straight[i - 1])) {
+      bridged.insert(i);
+      stops.insert(i - 1);
+    }
+  ASSERT_FALSE(bridged.empty()) << "frames 535 and 575-577 follow a frame without a closure";
+  for (std::size_t i : bridged) {
+    bool right = false;
+    for (const auto& f : straight[i].hypothesis.frames)
+      for (std::int64_t r : truth[static_cast<std::int64_t>(i)])
+        right = right || std::llabs(f.source_index - r) <= 10;
+    EXPECT_TRUE(right) << "frame " << i;
+  }
+
+  const auto resumed = run("ClosureRunGaps_resumed", options, stops);
+  for (std::size_t i = 0; i < straight.size(); ++i) {
+    SCOPED_TRACE("frame " + std::to_string(i));
+    EXPECT_EQ(resumed[i].hypothesis.accepted, straight[i].hypothesis.accepted);
+    EXPECT_EQ(resumed[i].hypothesis.location_id, straight[i].hypothesis.location_id);
+    EXPECT_EQ(resumed[i].hypothesis.inliers, straight[i].hypothesis.inliers);
+  }
+}
+
 TEST(TemporalOptions, RangesAndRoundTrip) {
   EXPECT_THROW(Options::fromSettings({{"temporal_max_gap", "0"}}), Error);
   EXPECT_THROW(Options::fromSettings({{"temporal_max_gap", "101"}}), Error);
