@@ -6,7 +6,7 @@
 //
 // Reach. The frame right after the anchor reaches temporal_radius links either way: between two
 // frames the best-matching place jitters by a link or two. Later frames, up to temporal_max_gap
-// after the anchor, bridge a stretch where no closure passes on its own (a parked lorry, a turn):
+// after the anchor, bridge a stretch where no closure passes on its own (blur, a passing car):
 // the camera has moved on by then, so they reach ahead only, temporal_radius + gap - 1 links in
 // the run's heading, and only a run with a heading reaches that far. Behind the anchor lies the
 // failure that kept temporal acceptances from anchoring: chains that fall behind the camera drift
@@ -23,6 +23,7 @@
 #include <optional>
 
 #include "filter/signature.h"
+#include "placedb/options.h"
 
 namespace placedb {
 
@@ -34,9 +35,9 @@ struct ClosureRun {
   int heading = 0;           // +1 towards higher location ids, -1 towards lower ones, 0 unknown
 };
 
-struct RunSettings {  // Options' temporal_radius and temporal_max_gap
-  int radius = 2;
-  int max_gap = 1;
+struct RunSettings {
+  int radius = Options().temporal_radius;
+  int max_gap = Options().temporal_max_gap;
 };
 
 // Which locations continue a run at a frame: those within `links` neighbour links of the anchor,
