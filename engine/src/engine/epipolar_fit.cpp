@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
-#include <unordered_set>
 
 namespace placedb {
 namespace {
@@ -46,36 +45,67 @@ double det3(const Mat3& m) {
          m[2] * (m[3] * m[7] - m[4] * m[6]);
 }
 
-// The fundamental matrices (normalised coordinates) through 7 pairs: the 2-dimensional null
-// space of the 7x9 system by Gauss-Jordan elimination, then det(F) = 0, a cubic in the pencil.
-int sevenPoint(const Normalised& a, const Normalised& b, const int* idx, Mat3* out) {
+// The 7x9 system of a sample, reduced by Gauss-Jordan elimination with partial pivoting.
+struct System {
   double m[kSample][9];
-  for (int r = 0; r < kSample; ++r) {
-    const double xa = a.x[idx[r]], ya = a.y[idx[r]], xb = b.x[idx[r]], yb = b.y[idx[r]];
-    const double row[9] = {xb * xa, xb * ya, xb, yb * xa, yb * ya, yb, xa, ya, 1.0};
-    std::copy(row, row + 9, m[r]);
-  }
   int pivot_col[kSample];
   bool is_pivot[9] = {};
   int rank = 0;
-  for (int c = 0; c < 9 && rank < kSample; ++c) {
-    int best = rank;
-    for (int r = rank + 1; r < kSample; ++r)
-      if (std::abs(m[r][c]) > std::abs(m[best][c])) best = r;
-    if (std::abs(m[best][c]) < 1e-10) continue;
-    if (best != rank)
-      for (int cc = 0; cc < 9; ++cc) std::swap(m[best][cc], m[rank][cc]);
-    const double inv = 1.0 / m[rank][c];
-    for (int cc = 0; cc < 9; ++cc) m[rank][cc] *= inv;
-    for (int r = 0; r < kSample; ++r) {
-      if (r == rank || m[r][c] == 0.0) continue;
-      const double f = m[r][c];
-      for (int cc = 0; cc < 9; ++cc) m[r][cc] -= f * m[rank][cc];
-    }
-    pivot_col[rank] = c;
-    is_pivot[c] = true;
-    ++rank;
+};
+
+void buildSystem(const Normalised& a, const Normalised& b, const int* idx, System* s) {
+  for (int r = 0; r < kSample; ++r) {
+    const double xa = a.x[idx[r]], ya = a.y[idx[r]], xb = b.x[idx[r]], yb = b.y[idx[r]];
+    const double row[9] = {xb * xa, xb * ya, xb, yb * xa, yb * ya, yb, xa, ya, 1.0};
+    std::copy(row, row + 9, s->m[r]);
   }
+}
+
+void eliminateColumn(System& s, int c) {
+  double(&m)[kSample][9] = s.m;
+  const int rank = s.rank;
+  // The first largest magnitude, by selects rather than branches that the data decide.
+  int best = rank;
+  double best_abs = std::abs(m[rank][c]);
+  for (int r = rank + 1; r < kSample; ++r) {
+    const double v = std::abs(m[r][c]);
+    const bool larger = v > best_abs;
+    best = larger ? r : best;
+    best_abs = larger ? v : best_abs;
+  }
+  if (best_abs < 1e-10) return;
+  if (best != rank)
+    for (int cc = 0; cc < 9; ++cc) std::swap(m[best][cc], m[rank][cc]);
+  const double inv = 1.0 / m[rank][c];
+  double pivot_row[9];  // the rows below read it from registers, not back from m
+  for (int cc = 0; cc < 9; ++cc) pivot_row[cc] = m[rank][cc] * inv;
+  std::copy(pivot_row, pivot_row + 9, m[rank]);
+  for (int r = 0; r < kSample; ++r) {
+    if (r == rank || m[r][c] == 0.0) continue;
+    const double f = m[r][c];
+    for (int cc = 0; cc < 9; ++cc) m[r][cc] -= f * pivot_row[cc];
+  }
+  s.pivot_col[rank] = c;
+  s.is_pivot[c] = true;
+  ++s.rank;
+}
+
+// Several systems column by column, each as on its own: the elimination is a chain of
+// dependent steps (a division among them), and independent chains side by side keep the
+// processor busy while one waits.
+void eliminate(System* systems, int count) {
+  for (int c = 0; c < 9; ++c)
+    for (int k = 0; k < count; ++k)
+      if (systems[k].rank < kSample) eliminateColumn(systems[k], c);
+}
+
+// The fundamental matrices (normalised coordinates) through the 7 pairs of an eliminated
+// system: its 2-dimensional null space, then det(F) = 0, a cubic in the pencil.
+int sevenPoint(const System& system, Mat3* out) {
+  const double(&m)[kSample][9] = system.m;
+  const int* pivot_col = system.pivot_col;
+  const bool* is_pivot = system.is_pivot;
+  const int rank = system.rank;
   if (rank != kSample) return 0;  // degenerate sample (repeated or collinear points)
   int free_cols[2], nfree = 0;
   for (int c = 0; c < 9; ++c)
@@ -173,16 +203,13 @@ void distanceParts(const Mat3& f, const Coordinates& p, double* num, double* nor
   }
 }
 
-// distance() from its parts when it is at most max_error, else nothing: the square root and
-// the division, most of the cost, are skipped for pairs that are clearly farther. `far_sq` is
-// max_error^2 (1 + 1e-6): well beyond the rounding of either side, so a pair it rules out is
-// one that distance() would have put beyond max_error too, and every kept distance is
-// distance()'s own value.
-bool within(double num, double norm, double max_error, double far_sq, double* d) {
+// Whether a pair is clearly beyond max_error, from distance()'s parts: the square root and
+// the division are left for the others. `far_sq` is max_error^2 (1 + 1e-6): well beyond the
+// rounding of either side, so a pair it rules out is one that distance() would have put beyond
+// max_error too. Computed without branches: which pairs are near is up to the data.
+bool farFor(double num, double norm, double far_sq) {
   // Away from underflow and overflow of the squares, whose rounding the margin would not cover.
-  if (norm > 1e-200 && num < 1e100 && num * num > far_sq * norm) return false;
-  *d = norm > 0 ? num / std::sqrt(norm) : 1e30;
-  return *d <= max_error;
+  return (norm > 1e-200) & (num < 1e100) & (num * num > far_sq * norm);
 }
 
 double log10Choose(int n, int k) {
@@ -212,6 +239,7 @@ EpipolarFit fitEpipolar(const std::vector<cv::Point2f>& a, const std::vector<cv:
   const Normalised na = normalise(a), nb = normalise(b);
   const Coordinates coordinates(a, b, n);
   std::vector<double> num(static_cast<std::size_t>(n)), norm(static_cast<std::size_t>(n));
+  std::vector<int> near(static_cast<std::size_t>(n));
 
   // Everything but the distance of the NFA, per k, once.
   const int iterations = settings.iterations;
@@ -226,55 +254,93 @@ EpipolarFit fitEpipolar(const std::vector<cv::Point2f>& a, const std::vector<cv:
   std::vector<double> close;
   close.reserve(static_cast<std::size_t>(n));
   Mat3 best_f{};
-  std::unordered_set<std::uint64_t> drawn;  // sets of pairs tried, as bit masks (n <= 64)
-  for (int it = 0; it < iterations; ++it) {
-    // Early samples come from the first pairs only (the most reliable), widening to all of
-    // them by half the iterations.
-    const int pool = std::min(n, kSample + std::max(1, (n - kSample) * 2 * (it + 1) / iterations));
-    int idx[kSample];
-    for (int s = 0; s < kSample;) {
-      // mt19937's values fit 32 bits: the same remainder by a cheaper division.
-      const int c =
-          static_cast<int>(static_cast<std::uint32_t>(rng()) % static_cast<std::uint32_t>(pool));
-      if (std::find(idx, idx + s, c) == idx + s) idx[s++] = c;
+  // Sets of pairs tried, as bit masks (n <= 64; a mask is never 0), in an open-addressing
+  // table at most a quarter full: no allocation per draw.
+  std::size_t slots = 16;
+  while (slots < 4 * static_cast<std::size_t>(iterations)) slots *= 2;
+  std::vector<std::uint64_t> drawn(n <= 64 ? slots : 0);
+  auto firstDraw = [&](std::uint64_t set) {
+    std::size_t at = static_cast<std::size_t>((set * 0x9e3779b97f4a7c15u) >> 32) & (slots - 1);
+    for (; drawn[at] != 0; at = (at + 1) & (slots - 1))
+      if (drawn[at] == set) return false;
+    drawn[at] = set;
+    return true;
+  };
+  // One model: its distances, most_within_max_error and the NFA over k.
+  auto evaluate = [&](const Mat3& f) {
+    close.clear();
+    distanceParts(f, coordinates, num.data(), norm.data());
+    // The pairs not ruled out, listed without a branch per pair; then distance()'s own value
+    // for each of them.
+    int near_count = 0;
+    for (int i = 0; i < n; ++i) {
+      near[near_count] = i;
+      near_count += !farFor(num[i], norm[i], far_sq);
     }
-    // A set of pairs drawn again fits the same models: on few pairs most draws are repeats (8
-    // pairs hold 8 sets of 7, 10 hold 120, against 400 draws). The random stream and the stops
-    // below go on as before, so the fit is the one every draw would give.
-    if (n <= 64) {
-      std::uint64_t set = 0;
-      for (int s = 0; s < kSample; ++s) set |= std::uint64_t{1} << idx[s];
-      if (!drawn.insert(set).second) continue;
+    for (int j = 0; j < near_count; ++j) {
+      const int i = near[j];
+      const double d = norm[i] > 0 ? num[i] / std::sqrt(norm[i]) : 1e30;
+      if (d <= settings.max_error_px) close.push_back(d);
     }
-    Mat3 models[3];
-    const int count = sevenPoint(na, nb, idx, models);
-    for (int m = 0; m < count; ++m) {
-      const Mat3 f = toPixels(models[m], na, nb);
-      close.clear();
-      distanceParts(f, coordinates, num.data(), norm.data());
-      for (int i = 0; i < n; ++i) {
-        double d;
-        if (within(num[i], norm[i], settings.max_error_px, far_sq, &d)) close.push_back(d);
-      }
-      fit.most_within_max_error =
-          std::max(fit.most_within_max_error, static_cast<int>(close.size()));
-      if (static_cast<int>(close.size()) <= kSample) continue;
-      std::sort(close.begin(), close.end());
-      for (int k = kSample + 1; k <= static_cast<int>(close.size()); ++k) {
-        const double eps = std::max(close[k - 1], kMinDistancePx);
-        const double log_alpha = std::min(0.0, log_alpha_px + std::log10(eps));
-        const double log_nfa = log_tests + log_choose[k - kSample] + (k - kSample) * log_alpha;
-        if (log_nfa < fit.log10_nfa) {
-          fit.log10_nfa = log_nfa;
-          fit.inliers = k;
-          fit.threshold_px = close[k - 1];
-          best_f = f;
-        }
+    fit.most_within_max_error = std::max(fit.most_within_max_error, static_cast<int>(close.size()));
+    if (static_cast<int>(close.size()) <= kSample) return;
+    std::sort(close.begin(), close.end());
+    for (int k = kSample + 1; k <= static_cast<int>(close.size()); ++k) {
+      const double eps = std::max(close[k - 1], kMinDistancePx);
+      const double log_alpha = std::min(0.0, log_alpha_px + std::log10(eps));
+      const double log_nfa = log_tests + log_choose[k - kSample] + (k - kSample) * log_alpha;
+      if (log_nfa < fit.log10_nfa) {
+        fit.log10_nfa = log_nfa;
+        fit.inliers = k;
+        fit.threshold_px = close[k - 1];
+        best_f = f;
       }
     }
-    if (settings.stop_when_passed && fit.log10_nfa <= pass_at) break;
-    if (settings.stop_at_inliers > 0 && fit.most_within_max_error >= settings.stop_at_inliers)
-      break;
+  };
+  // Iterations go in pairs whose eliminations run side by side. The second one's draw comes
+  // before the first one's models are scored, which changes nothing: the scores do not steer
+  // the draws, and a stop after the first leaves the second unused.
+  constexpr int kBatch = 2;
+  bool stopped = false;
+  for (int it = 0; it < iterations && !stopped; it += kBatch) {
+    const int batch = std::min(kBatch, iterations - it);
+    System systems[kBatch];
+    int fresh = 0;
+    bool repeat[kBatch] = {};
+    for (int j = 0; j < batch; ++j) {
+      // Early samples come from the first pairs only (the most reliable), widening to all of
+      // them by half the iterations.
+      const int pool =
+          std::min(n, kSample + std::max(1, (n - kSample) * 2 * (it + j + 1) / iterations));
+      int idx[kSample];
+      for (int s = 0; s < kSample;) {
+        // mt19937's values fit 32 bits: the same remainder by a cheaper division.
+        const int c =
+            static_cast<int>(static_cast<std::uint32_t>(rng()) % static_cast<std::uint32_t>(pool));
+        if (std::find(idx, idx + s, c) == idx + s) idx[s++] = c;
+      }
+      // A set of pairs drawn again fits the same models: on few pairs most draws are repeats
+      // (8 pairs hold 8 sets of 7, 10 hold 120, against 400 draws). The random stream and the
+      // stops go on as before, so the fit is the one every draw would give.
+      if (n <= 64) {
+        std::uint64_t set = 0;
+        for (int s = 0; s < kSample; ++s) set |= std::uint64_t{1} << idx[s];
+        repeat[j] = !firstDraw(set);
+      }
+      if (!repeat[j]) buildSystem(na, nb, idx, &systems[fresh++]);
+    }
+    eliminate(systems, fresh);
+    for (int j = 0, k = 0; j < batch; ++j) {
+      if (repeat[j]) continue;
+      Mat3 models[3];
+      const int count = sevenPoint(systems[k++], models);
+      for (int m = 0; m < count; ++m) evaluate(toPixels(models[m], na, nb));
+      if ((settings.stop_when_passed && fit.log10_nfa <= pass_at) ||
+          (settings.stop_at_inliers > 0 && fit.most_within_max_error >= settings.stop_at_inliers)) {
+        stopped = true;
+        break;
+      }
+    }
   }
   fit.passed = fit.log10_nfa <= pass_at;
   if (fit.inliers == 0) return fit;
