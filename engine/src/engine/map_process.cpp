@@ -264,9 +264,8 @@ void MapImpl::acceptLoopClosure(std::int64_t hypothesis, const Verified& verifie
   // Only a closure that passed on its own anchors the next ones: chains of temporal
   // acceptances would drift along the graph while the camera moves on.
   if (!verified.temporal)
-    counters_.closure_run =
-        anchorAt(counters_.closure_run, hypothesis, r.frame_id, r.session_id,
-                 verified.continues_run, {options_.temporal_radius, options_.temporal_max_gap});
+    counters_.closure_run = anchorAt(counters_.closure_run, hypothesis, r.frame_id, r.session_id,
+                                     verified.continues_run, toRunSettings(options_));
   if (hypothesis != r.location_id) {
     w.links.push_back(
         link(r.location_id, hypothesis, storage::LinkType::kLoopClosure, r.hypothesis.score));

@@ -88,7 +88,7 @@ std::vector<LocationId> MapImpl::nearLastClosure(std::int64_t frame_id) const {
   if (!relaxed || !geometricCheckOn(options_)) return {};
   const ClosureRun& run = counters_.closure_run;
   const std::optional<RunReach> reach =
-      reachOf(run, frame_id, *session_id_, {options_.temporal_radius, options_.temporal_max_gap});
+      reachOf(run, frame_id, *session_id_, toRunSettings(options_));
   if (!reach) return {};
   std::vector<LocationId> near;
   const auto inWm = [this](LocationId id) { return tiers_->isIn(id, Tier::kWm); };

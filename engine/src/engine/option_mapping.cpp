@@ -60,6 +60,13 @@ GeometricCheckSettings toGeometricCheckSettings(const Options& o) {
   return g;
 }
 
+RunSettings toRunSettings(const Options& o) {
+  RunSettings s;
+  s.radius = o.temporal_radius;
+  s.max_gap = o.temporal_max_gap;
+  return s;
+}
+
 bool geometricCheckOn(const Options& o) {
   const bool count = o.geometry_rule != GeometryRule::kNfa && o.geometry_min_inliers > 0;
   const bool chance = o.geometry_rule != GeometryRule::kInliers && o.geometry_max_nfa > 0;

@@ -1,5 +1,6 @@
 #pragma once
 // From the public Options to each component's own settings struct.
+#include "engine/closure_run.h"
 #include "engine/geometric_check.h"
 #include "features/feature_options.h"
 #include "filter/filter_settings.h"
@@ -14,6 +15,7 @@ vocab::VocabularyOptions toVocabularyOptions(const Options& options);
 BayesFilterSettings toFilterSettings(const Options& options);
 MemorySettings toMemorySettings(const Options& options);
 GeometricCheckSettings toGeometricCheckSettings(const Options& options);
+RunSettings toRunSettings(const Options& options);
 bool geometricCheckOn(const Options& options);  // geometry_min_inliers or _max_nfa not 0
 
 }  // namespace placedb
