@@ -161,6 +161,11 @@ Mat3 toPixels(const Mat3& fn, const Normalised& a, const Normalised& b) {
   return f;
 }
 
+// A distance from its two parts (below): the numerator and the smaller squared line norm.
+double distanceFromParts(double num, double norm) {
+  return norm > 0 ? num / std::sqrt(norm) : 1e30;
+}
+
 // The larger of the two point-to-epipolar-line distances, pixels.
 double distance(const Mat3& f, const cv::Point2f& a, const cv::Point2f& b) {
   const double lb0 = f[0] * a.x + f[1] * a.y + f[2], lb1 = f[3] * a.x + f[4] * a.y + f[5],
@@ -168,8 +173,7 @@ double distance(const Mat3& f, const cv::Point2f& a, const cv::Point2f& b) {
   const double la0 = f[0] * b.x + f[3] * b.y + f[6], la1 = f[1] * b.x + f[4] * b.y + f[7];
   const double num = std::abs(b.x * lb0 + b.y * lb1 + lb2);
   const double nb = lb0 * lb0 + lb1 * lb1, na = la0 * la0 + la1 * la1;
-  const double norm = std::min(nb, na);
-  return norm > 0 ? num / std::sqrt(norm) : 1e30;
+  return distanceFromParts(num, std::min(nb, na));
 }
 
 // The pairs in double, one array per coordinate, and per model the two parts of distance():
@@ -279,7 +283,7 @@ EpipolarFit fitEpipolar(const std::vector<cv::Point2f>& a, const std::vector<cv:
     }
     for (int j = 0; j < near_count; ++j) {
       const int i = near[j];
-      const double d = norm[i] > 0 ? num[i] / std::sqrt(norm[i]) : 1e30;
+      const double d = distanceFromParts(num[i], norm[i]);
       if (d <= settings.max_error_px) close.push_back(d);
     }
     fit.most_within_max_error = std::max(fit.most_within_max_error, static_cast<int>(close.size()));
