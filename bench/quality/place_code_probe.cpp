@@ -19,9 +19,9 @@
 #include <string>
 #include <vector>
 
-#include "engine/option_mapping.h"
 #include "features/feature_extractor.h"
 #include "features/image_conversion.h"
+#include "map/option_mapping.h"
 #include "memory/place_code.h"
 #include "placedb/options.h"
 

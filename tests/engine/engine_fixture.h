@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/map_impl.h"
 #include "features/image_conversion.h"
+#include "map/map_impl.h"
 #include "placedb/map.h"
 #include "placedb/storage/map_files.h"
 #include "test_paths.h"

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/option_mapping.h"
+#include "map/option_mapping.h"
 #include "placedb/error.h"
 #include "placedb/options.h"
 

@@ -14,9 +14,9 @@
 #include <random>
 
 #include "crash_scenario.h"
-#include "engine/map_impl.h"
 #include "error_code.h"
 #include "features/image_conversion.h"
+#include "map/map_impl.h"
 #include "placedb/map.h"
 #include "reliability_support.h"
 

@@ -19,7 +19,7 @@ enum class DecisionRule : std::uint8_t {
   kPaper,    // accept when p(new) < t_loop (paper 000's wording), no ratio test
 };
 
-// How the epipolar check decides (engine/src/engine/geometric_check.h).
+// How the epipolar check decides (engine/src/geometry/geometric_check.h).
 enum class GeometryRule : std::uint8_t {
   kInliers,  // the most pairs one model puts within geometry_max_error_px >= min_inliers
   kNfa,      // a contrario: NFA <= geometry_max_nfa and enough overlap
@@ -99,7 +99,7 @@ struct Options {
   // --- temporal consistency (iBoW-LCD's islands; RTAB-Map's closures that follow the graph) ---
   // A hypothesis that misses the check's rule still passes a relaxed one (temporal_min_inliers,
   // or temporal_max_nfa and temporal_min_overlap) when it continues the run of loop closures the
-  // camera is making (engine/src/engine/closure_run.h): within temporal_radius WM links of the
+  // camera is making (engine/src/decision/closure_run.h): within temporal_radius WM links of the
   // run's last closure that passed on its own, on the next frame; up to temporal_max_gap frames
   // later, within temporal_radius + gap - 1 links ahead of it in the run's heading. Those
   // locations are checked as candidates too.

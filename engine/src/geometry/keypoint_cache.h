@@ -1,0 +1,43 @@
+#pragma once
+// What the geometric check needs of a working-memory location, kept in RAM: its keypoints'
+// positions and words, and their own descriptors as stored (encodeDescriptors). An entry is made
+// the first time a location is a candidate and dropped when the location leaves working memory, so
+// the check reads SQLite once per location and stay in WM instead of once per frame.
+//
+// An entry holds the stored descriptor bytes as their codes (storedDescriptorCodes, which
+// keeps every byte's value and each row's scale, so nothing is lost), made the same way whether
+// they came from the cache or from the file: a resumed run, whose cache starts empty, sees what
+// a straight run sees. Codes rather than decoded floats: the matcher decodes only the rows it
+// compares in full (descriptor_match.h), and they take half the room of floats.
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <unordered_map>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "geometry/descriptor_match.h"
+
+namespace placedb {
+
+struct CachedKeypoints {
+  std::vector<cv::Point2f> points;
+  std::vector<std::int64_t> words;  // the word each keypoint was quantised to
+  // The location's encodeDescriptors() rows as codes; null when none are stored.
+  std::shared_ptr<const DescriptorCodes> codes;
+};
+
+class KeypointCache {
+ public:
+  const CachedKeypoints* find(std::int64_t location) const;
+  const CachedKeypoints& insert(std::int64_t location, CachedKeypoints entry);
+  // Drops every entry whose location `keep` refuses (those that left working memory).
+  void retainIf(const std::function<bool(std::int64_t)>& keep);
+  std::size_t size() const { return entries_.size(); }
+
+ private:
+  std::unordered_map<std::int64_t, CachedKeypoints> entries_;
+};
+
+}  // namespace placedb

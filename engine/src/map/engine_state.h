@@ -1,0 +1,51 @@
+#pragma once
+// The engine's own counters and the vocabulary's index state, as kept in the map's engine_state
+// table so that a reopened map continues exactly where the last committed frame left it.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "decision/closure_run.h"
+#include "placedb/storage/map_store.h"
+#include "vocabulary/vocabulary.h"
+
+namespace placedb {
+
+struct EngineCounters {
+  std::int64_t next_frame_id = 1;
+  std::int64_t next_location_id = 1;
+  std::int64_t feature_sum = 0;  // features over good frames: the bad-frame running mean
+  std::int64_t feature_frames = 0;
+  std::int64_t last_location = 0;  // newest location of the current session, 0 = none
+  std::int64_t last_session = 0;   // session that last_location belongs to
+  double previous_score = 0;       // the filter's ratio-test memory
+  ClosureRun closure_run;          // the loop closures a revisit is making
+  std::int64_t next_wm_age = 1;    // the memory tiers' age clock (next_location_id on older maps)
+
+  void save(storage::MapStore& store) const;
+  // False when the map holds no engine state yet (a new map).
+  bool load(const storage::MapStore& store);
+};
+
+// The vocabulary's index state: a small header in engine_state and the kd-forest's internal nodes
+// in kd_nodes, of which a frame writes only those that changed. Maps of schema 2 stored an
+// append-only split log in engine_state chunks instead; load() reads it for conversion and the
+// next save() replaces it with the node table.
+class VocabularyStateWriter {
+ public:
+  static constexpr std::size_t kSplitsPerChunk = 1024;  // of the schema-2 split log
+
+  // Writes what changed since the last save() or load() (takes the vocabulary's index changes).
+  void save(storage::MapStore& store, vocab::Vocabulary& vocabulary);
+  // Empty optional when the map holds no vocabulary state. kMapRefused on damaged state.
+  std::optional<vocab::IndexState> load(const storage::MapStore& store);
+
+ private:
+  std::int64_t saved_next_word_id_ = -1;
+  std::size_t legacy_chunks_ = 0;  // split-log chunks still in the file, dropped by save()
+  vocab::ForestChanges changes_;   // reused every frame
+  std::vector<storage::KdNodeRecord> upserts_;
+  std::vector<std::pair<int, std::int64_t>> deletions_;
+};
+
+}  // namespace placedb

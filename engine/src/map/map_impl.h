@@ -1,0 +1,174 @@
+#pragma once
+// The engine behind placedb::Map: the per-frame pipeline over the storage, vocabulary, memory
+// tiers and Bayes filter. One MapImpl owns one open map file.
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "features/feature_extractor.h"
+#include "filter/bayes_filter.h"
+#include "filter/inverted_index.h"
+#include "filter/link_graph.h"
+#include "geometry/geometry.h"
+#include "map/engine_state.h"
+#include "map/state_keys.h"
+#include "memory/memory_tiers.h"
+#include "memory/place_code.h"
+#include "memory/place_index.h"
+#include "memory/place_neighbourhood.h"
+#include "placedb/map.h"
+#include "placedb/storage/map_store.h"
+#include "vocabulary/vocabulary.h"
+
+namespace placedb {
+
+// The graph's kind of a stored link (merge links never enter the graph).
+inline LinkKind linkKindOf(storage::LinkType type) {
+  return type == storage::LinkType::kLoopClosure ? LinkKind::kLoopClosure : LinkKind::kNeighbour;
+}
+
+class MapImpl final : public Map {
+ public:
+  MapImpl(const std::string& path, const Options& options, Mode mode);
+  ~MapImpl() override;
+
+  std::optional<SessionInfo> lastSession() const override;
+  std::vector<SessionInfo> sessions() const override;
+  std::map<std::string, std::string> sessionSettings(std::int64_t session_id) const override;
+  SessionInfo beginSession(const std::string& source,
+                           const std::string& source_digest = "") override;
+  SessionInfo resumeSession(std::int64_t session_id) override;
+  FrameResult process(const cv::Mat& image, std::int64_t source_index,
+                      const std::string& source_path) override;
+  FrameResult recordUnreadable(std::int64_t source_index, const std::string& source_path) override;
+  QueryResult query(const cv::Mat& image, std::size_t top_k) override;
+  std::size_t importVocabulary(const std::string& file, bool text, VocabularyMode mode) override;
+  void close() override;
+  const Options& options() const override { return options_; }
+  const std::string& path() const override { return store_->path(); }
+
+  // For tests: empty when every location is in exactly one tier, the inverted index holds
+  // exactly the STM and WM signatures and the vocabulary exactly their words; else the problem.
+  std::string checkConsistency() const;
+
+ private:
+  // What one frame writes, gathered while it is processed and committed in one transaction.
+  struct FrameWrite;
+
+  void configure(const Options& options);  // builds extractor, vocabulary, filter, tiers
+  void restoreFromStore();                 // STM, WM, index, filter, counters
+  void requireSession(const char* what) const;
+  void requireWritable(const char* what) const;
+  SessionInfo toInfo(const storage::SessionRecord& record) const;
+
+  // One frame, as named steps: quantise -> place in STM -> search LTM -> likelihood and filter
+  // -> decide the loop closure -> manage memory -> commit.
+  FrameResult processFeatures(const Features& features, std::int64_t source_index,
+                              const std::string& source_path, double features_ms);
+  struct Quantised {
+    Signature signature;
+    std::vector<std::int64_t> word_of_feature;  // -1 where a feature got no word
+    std::vector<std::int64_t> created_words;
+  };
+  Quantised quantise(const Features& features, FrameResult& result, FrameWrite& write);
+  // Merges the frame into the newest location or makes a new one (with its place code).
+  void placeInShortTermMemory(const Features& features, const Quantised& q, FrameResult& result,
+                              FrameWrite& write);
+  // Brings back the LTM locations whose place codes rank among the ltm_search most like the frame.
+  void searchLongTermMemory(const Features& features, FrameWrite& write, FrameResult& result);
+  // Verifies the filter's outcome and records the decision; returns the reported hypothesis.
+  std::int64_t decideLoopClosure(const FilterOutcome& outcome, const Features& features,
+                                 const Quantised& q,
+                                 const std::vector<LocationSimilarity>& similarities,
+                                 FrameResult& result, FrameWrite& write, StageTimes& times);
+  // An accepted closure's relative pose when this session and the hypothesis' have intrinsics.
+  std::optional<storage::ClosurePose> closurePose(std::int64_t hypothesis,
+                                                  const GeometricResult& geometry);
+  CameraIntrinsics sessionIntrinsics(std::int64_t session_id);  // cached per session
+  // Retrieval around the hypothesis, then transfer; memory_ms is this frame's time in the
+  // stages that grow with memory, which the time budget (t_time_ms) bounds.
+  void manageMemory(std::int64_t hypothesis, double memory_ms, FrameWrite& write,
+                    FrameResult& result);
+  FrameResult recordBad(std::int64_t source_index, const std::string& source_path,
+                        std::size_t feature_count, const StageTimes& times);
+  // Picks the reported hypothesis among the filter's best and its WM neighbours and verifies
+  // it; fills result.hypothesis (location, posterior, score, acceptance, reason).
+  struct Verified {
+    std::int64_t location = 0;  // kNewPlace (-1) when there is none
+    bool passed = false;        // the geometric check (or no check) let it through
+    int inliers = 0;
+    int matches = 0;             // descriptor matches behind the inliers
+    bool temporal = false;       // passed on the relaxed rule, near the last accepted closure
+    bool continues_run = false;  // lies within the reach of the closure run (closure_run.h)
+    int checked = 0;             // candidates the check ran on
+    double log10_nfa = 0;        // the reported candidate's number of false alarms, log10
+    GeometricResult geometry;    // the reported candidate's check (its agreeing pairs)
+  };
+  // Links the frame's location to the accepted closure; one that passed on its own anchors the
+  // closure run (closure_run.h).
+  void acceptLoopClosure(std::int64_t hypothesis, const Verified& verified, FrameResult& result,
+                         FrameWrite& write);
+  Verified verifyHypothesis(const FilterOutcome& outcome, const Features& features,
+                            const std::vector<std::int64_t>& word_of_feature,
+                            const std::vector<LocationSimilarity>& similarities,
+                            std::int64_t frame_id);
+  // The WM locations that continue the closure run at this frame (closure_run.h), sorted; empty
+  // when temporal consistency is off or the frame continues no run.
+  std::vector<LocationId> nearLastClosure(std::int64_t frame_id) const;
+  // The relaxed rule (temporal_*) for a candidate near the last accepted closure.
+  bool passesNearLastClosure(const GeometricResult& g) const;
+  const CachedKeypoints& keypointsOf(std::int64_t location_id);   // from the cache or the file
+  CachedKeypoints loadKeypoints(std::int64_t location_id) const;  // from the file
+  GeometricView viewOf(const CachedKeypoints& keypoints) const;
+  void retrieveNeighbours(std::int64_t hypothesis, FrameWrite& write, FrameResult& result);
+  // Moves LTM locations back to WM: signatures, missing words, links, ages.
+  void bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write, FrameResult& result);
+  // Words of the file that the vocabulary lacks go back into it with their stored descriptors
+  // (repeats allowed).
+  void restoreWords(std::vector<std::int64_t> missing);
+  void storePlaceCode(std::int64_t location_id, const Features& features, FrameWrite& write);
+  const std::vector<std::int8_t>& frameCode(const Features& features);
+  void transferToLtm(std::int64_t hypothesis, double frame_seconds, FrameWrite& write,
+                     FrameResult& result);
+  void enterWorkingMemory(const std::vector<std::int64_t>& ids, FrameWrite& write);
+  void leaveIndex(const WordChanges& changes);  // unreferenced words leave, imported ones stay
+  void commit(FrameWrite& write, FrameResult& result, const std::string& source_path);
+  std::vector<FrameRef> framesOf(std::int64_t location_id) const;
+  // Localisation: makes the vocabulary complete (the words of LTM locations too) and indexes
+  // the LTM signatures, once, when the map's words fit the budget; else leaves LTM to the codes.
+  void loadLtmWords();
+  void loadPlaceNeighbourhood();  // localisation: the neighbour links over the place codes
+
+  std::unique_ptr<storage::MapStore> store_;
+  Mode mode_;
+  Options options_;
+  std::unique_ptr<FeatureExtractor> extractor_;
+  std::unique_ptr<vocab::Vocabulary> vocabulary_;
+  InvertedIndex index_;  // signatures of STM and WM locations
+  LinkGraph graph_;      // links among STM and WM locations
+  std::unique_ptr<MemoryTiers> tiers_;
+  std::unique_ptr<BayesFilter> filter_;
+  std::optional<PlaceCoder> coder_;  // absent until the map's first location
+  PlaceIndex places_;                // the place code of every location, every tier
+  // Localisation only: the signatures of LTM locations, their words added to the vocabulary,
+  // loaded by the first query when the map's words fit kQueryWordBudget (map_query.cpp).
+  std::optional<InvertedIndex> ltm_words_;
+  // Localisation only: the neighbour links of every location over the place codes, for the
+  // query's code search (built by the first query).
+  std::optional<PlaceNeighbourhood> place_neighbourhood_;
+  std::optional<std::vector<std::int8_t>> frame_code_;  // the current frame's, once computed
+  std::vector<LocationId> searched_back_;  // brought back from LTM by this frame's code search
+  KeypointCache keypoint_cache_;  // of WM locations the geometric check compared frames with
+  EngineCounters counters_;
+  VocabularyStateWriter vocabulary_state_;
+  std::vector<std::int64_t> imported_words_;  // ascending; never leave the index
+  std::optional<std::int64_t> session_id_;
+  std::map<std::int64_t, CameraIntrinsics> session_intrinsics_;  // other sessions', as read
+  bool closed_ = false;
+  bool broken_ = false;  // a failed commit left RAM ahead of the file: reopen to continue
+};
+
+}  // namespace placedb

@@ -1,0 +1,302 @@
+// Opening a map: settings to component options, restoring RAM state from the file, sessions.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstring>
+#include <set>
+
+#include "map/map_impl.h"
+#include "map/option_mapping.h"
+#include "placedb/version.h"
+
+namespace placedb {
+namespace {
+
+// The components check their own settings in their constructors; building them once before the
+// map file is touched means a setting they refuse never creates or changes a file.
+void checkComponentSettings(const Options& options) {
+  auto extractor = makeFeatureExtractor(toFeatureOptions(options));
+  vocab::Vocabulary vocabulary(toVocabularyOptions(options), extractor->dim(),
+                               extractor->signature());
+  BayesFilter filter(toFilterSettings(options));
+  MemoryTiers tiers(toMemorySettings(options));
+}
+
+}  // namespace
+
+std::unique_ptr<Map> Map::open(const std::string& path, const Options& options, Mode mode) {
+  options.validate();
+  checkComponentSettings(options);
+  return std::make_unique<MapImpl>(path, options, mode);
+}
+
+MapImpl::MapImpl(const std::string& path, const Options& options, Mode mode) : mode_(mode) {
+  store_ = std::make_unique<storage::MapStore>(path, mode == Mode::kLocalisation
+                                                         ? storage::OpenMode::kReadOnly
+                                                         : storage::OpenMode::kReadWrite);
+  configure(options);
+  restoreFromStore();
+}
+
+MapImpl::~MapImpl() {
+  try {
+    close();
+  } catch (...) {
+    // A destructor must not throw; the session simply stays marked as interrupted.
+  }
+}
+
+void MapImpl::configure(const Options& options) {
+  options.validate();
+  options_ = options;
+  extractor_ = makeFeatureExtractor(toFeatureOptions(options));
+  if (auto made_with = store_->getStateText(kMapExtractorKey);
+      made_with && *made_with != extractor_->signature())
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("{} was made with {} features; extractor={} gives {}: mixing them is "
+                            "refused (use a new map)",
+                            store_->path(), *made_with, toString(options.extractor),
+                            extractor_->signature()));
+  auto vocabulary_options = toVocabularyOptions(options);
+  vocabulary_options.fixed = vocabulary_options.fixed || mode_ == Mode::kLocalisation ||
+                             store_->getStateText(kVocabularyModeKey) == std::string("fixed");
+  vocabulary_ = std::make_unique<vocab::Vocabulary>(vocabulary_options, extractor_->dim(),
+                                                    extractor_->signature());
+  filter_ = std::make_unique<BayesFilter>(toFilterSettings(options));
+  tiers_ = std::make_unique<MemoryTiers>(toMemorySettings(options));
+  index_ = InvertedIndex();
+  graph_ = LinkGraph();
+  vocabulary_state_ = VocabularyStateWriter();
+}
+
+void MapImpl::restoreFromStore() {
+  const auto snapshot_of_file = store_->readSnapshot();
+  counters_ = EngineCounters();
+  counters_.load(*store_);
+
+  // Tiers, with their ages in the transfer order (the location id on maps before schema 4).
+  MemorySnapshot snapshot;
+  snapshot.next_age = counters_.next_wm_age;
+  const auto ages = store_->wmAges();
+  std::vector<std::int64_t> live;  // STM and WM
+  for (Tier tier : {Tier::kStm, Tier::kWm, Tier::kLtm}) {
+    for (const auto& row : store_->locationsInTier(tier)) {
+      const auto age = ages.find(row.id);
+      snapshot.locations.push_back(
+          {row.id, tier, row.weight, age == ages.end() ? row.id : age->second});
+      if (tier == Tier::kStm) snapshot.stm.push_back(row.id);
+      if (tier != Tier::kLtm) live.push_back(row.id);
+    }
+  }
+  std::sort(snapshot.locations.begin(), snapshot.locations.end(),
+            [](const auto& a, const auto& b) { return a.id < b.id; });
+  std::sort(live.begin(), live.end());
+  tiers_->restore(snapshot);
+
+  // Signatures of STM and WM, and the words they reference.
+  std::vector<std::int64_t> word_ids;
+  {
+    auto signatures = store_->loadWordIds(live);
+    for (std::int64_t id : live) {
+      word_ids.insert(word_ids.end(), signatures[id].begin(), signatures[id].end());
+      index_.add(id, Signature::fromWords(std::move(signatures[id])));
+    }
+  }
+  imported_words_ = store_->importedWordIds();
+  word_ids.insert(word_ids.end(), imported_words_.begin(), imported_words_.end());
+  std::sort(word_ids.begin(), word_ids.end());
+  word_ids.erase(std::unique(word_ids.begin(), word_ids.end()), word_ids.end());
+  auto state = vocabulary_state_.load(*store_);
+  if (state && state->kd_trees != options_.kd_trees)
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("{} indexes its words with kd_trees={}; kd_trees={} is refused "
+                            "(the setting is fixed when a map is made)",
+                            store_->path(), state->kd_trees, options_.kd_trees));
+  if (state) {
+    const int dim = extractor_->dim();
+    auto load = [&](std::size_t begin, std::size_t count, float* rows, std::int64_t* created) {
+      const std::vector<std::int64_t> span(word_ids.begin() + std::ptrdiff_t(begin),
+                                           word_ids.begin() + std::ptrdiff_t(begin + count));
+      store_->loadFloatDescriptors(span, dim, rows, created);
+    };
+    try {
+      vocabulary_->restore(*state, word_ids, load);
+    } catch (const Error& e) {
+      // The state came from the file: if it does not fit, the file is damaged, not the caller.
+      if (e.code() != ErrorCode::kInvalidArgument) throw;
+      throw Error(ErrorCode::kMapRefused, store_->path() + ": " + e.what());
+    }
+  } else if (!word_ids.empty()) {
+    throw Error(ErrorCode::kMapRefused,
+                store_->path() + ": working memory has words but the vocabulary state is missing");
+  }
+
+  // Links among STM and WM locations.
+  std::set<std::int64_t> live_set(live.begin(), live.end());
+  for (std::int64_t id : live) {
+    graph_.addNode(id);
+    for (const auto& link : store_->links(id)) {
+      std::int64_t other = link.location_a == id ? link.location_b : link.location_a;
+      if (link.type != storage::LinkType::kMerge && live_set.count(other))
+        graph_.addLink(id, other, linkKindOf(link.type));
+    }
+  }
+
+  // Place codes of every tier, and the centres that made them.
+  coder_.reset();
+  places_.clear();
+  place_neighbourhood_.reset();  // of the codes just cleared
+  ltm_words_.reset();            // their words went with the vocabulary configure() replaced
+  if (auto centres = store_->getState(kPlaceCoderKey)) {
+    try {
+      coder_ = PlaceCoder::fromBytes(*centres, extractor_->dim());
+      for (const auto& record : store_->placeCodes()) places_.add(record.location_id, record.code);
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::kInvalidArgument) throw;
+      throw Error(ErrorCode::kMapRefused, store_->path() + ": " + e.what());
+    }
+  }
+
+  FilterState filter_state;
+  filter_state.posterior = store_->loadPosterior();
+  filter_state.previous_score = counters_.previous_score;
+  filter_->restore(filter_state);
+}
+
+void MapImpl::requireWritable(const char* what) const {
+  if (mode_ == Mode::kLocalisation)
+    throw Error(ErrorCode::kReadOnly,
+                fmt::format("{}: {} needs the map opened for mapping, not localisation",
+                            store_->path(), what));
+  if (broken_)
+    throw Error(ErrorCode::kStorage,
+                fmt::format("{}: a previous frame failed to commit; reopen the map to resume",
+                            store_->path()));
+}
+
+void MapImpl::requireSession(const char* what) const {
+  requireWritable(what);
+  if (!session_id_)
+    throw Error(ErrorCode::kInternal, fmt::format("{}: {} before beginSession() or resumeSession()",
+                                                  store_->path(), what));
+}
+
+SessionInfo MapImpl::toInfo(const storage::SessionRecord& record) const {
+  SessionInfo info;
+  info.id = record.id;
+  info.source = record.source;
+  info.started_at = record.started_at;
+  info.ended_at = record.ended_at.value_or("");
+  info.clean_close = record.clean_close;
+  info.source_digest = record.source_digest.value_or("");
+  info.frames = store_->frameCount(record.id);
+  info.last_source_index = store_->lastFrameIndex(record.id);
+  return info;
+}
+
+std::optional<SessionInfo> MapImpl::lastSession() const {
+  auto last = store_->lastSession();
+  if (!last) return std::nullopt;
+  return toInfo(*last);
+}
+
+std::vector<SessionInfo> MapImpl::sessions() const {
+  std::vector<SessionInfo> out;
+  for (const auto& s : store_->sessions()) out.push_back(toInfo(s));
+  return out;
+}
+
+std::map<std::string, std::string> MapImpl::sessionSettings(std::int64_t session_id) const {
+  return store_->settings(session_id);
+}
+
+SessionInfo MapImpl::beginSession(const std::string& source, const std::string& source_digest) {
+  requireWritable("beginSession");
+  if (session_id_) close();
+  closed_ = false;
+  // A new session's locations never merge with, nor link to, the previous session's newest one;
+  // the previous session's STM becomes loop candidates.
+  auto tx = store_->begin();
+  std::int64_t id = store_->beginSession(source, options_.toSettings(), PLACEDB_VERSION_STRING);
+  if (!source_digest.empty()) store_->setSourceDigest(id, source_digest);
+  if (!store_->getStateText(kMapExtractorKey))
+    store_->putState(kMapExtractorKey, extractor_->signature());
+  std::vector<std::int64_t> stm(tiers_->stm().begin(), tiers_->stm().end());
+  if (!stm.empty()) {
+    MemorySnapshot snap = tiers_->snapshot();
+    for (auto& r : snap.locations)
+      if (r.tier == Tier::kStm) r.tier = Tier::kWm;
+    snap.stm.clear();
+    tiers_->restore(snap);
+    store_->setTier(stm, storage::Tier::kWm);
+  }
+  counters_.last_location = 0;
+  counters_.last_session = id;
+  counters_.save(*store_);
+  tx.commit();
+  session_id_ = id;
+  return toInfo(*store_->lastSession());
+}
+
+SessionInfo MapImpl::resumeSession(std::int64_t session_id) {
+  requireWritable("resumeSession");
+  if (session_id_) close();
+  closed_ = false;
+  auto last = store_->lastSession();
+  if (!last || last->id != session_id)
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("{}: only the last session can be resumed (asked {}, last is {})",
+                            store_->path(), session_id, last ? last->id : 0));
+  // The session continues with the settings it started with, so its results stay exact.
+  Options stored = Options::fromSettings(store_->settings(session_id));
+  if (stored.toSettings() != options_.toSettings()) {
+    configure(stored);
+    restoreFromStore();
+  }
+  store_->reopenSession(session_id);
+  session_id_ = session_id;
+  return toInfo(*store_->lastSession());
+}
+
+void MapImpl::close() {
+  if (closed_ || !session_id_ || broken_) {
+    closed_ = true;
+    return;
+  }
+  store_->endSession(*session_id_, true);
+  closed_ = true;
+  session_id_.reset();
+}
+
+}  // namespace placedb
+
+namespace placedb {
+
+std::string MapImpl::checkConsistency() const {
+  if (auto problem = tiers_->checkInvariants(); !problem.empty()) return problem;
+  std::set<std::int64_t> live(tiers_->stm().begin(), tiers_->stm().end());
+  for (std::int64_t id : tiers_->wm()) live.insert(id);
+  if (index_.locationCount() != live.size())
+    return fmt::format("inverted index holds {} locations, STM+WM {}", index_.locationCount(),
+                       live.size());
+  std::set<std::int64_t> words;
+  for (std::int64_t id : live) {
+    if (!index_.contains(id)) return fmt::format("location {} missing from the index", id);
+    for (const auto& e : index_.signatureOf(id).entries()) words.insert(e.word);
+  }
+  words.insert(imported_words_.begin(), imported_words_.end());
+  auto in_vocabulary = vocabulary_->ids();
+  if (std::vector<std::int64_t>(words.begin(), words.end()) != in_vocabulary)
+    return fmt::format("vocabulary holds {} words, STM+WM (and imports) reference {}",
+                       in_vocabulary.size(), words.size());
+  // The file agrees with RAM on every tier.
+  for (std::int64_t id : live) {
+    auto stored = store_->location(id);
+    if (!stored) return fmt::format("location {} is not in the file", id);
+    if (stored->tier != tiers_->tierOf(id))
+      return fmt::format("location {} has another tier on file", id);
+  }
+  return {};
+}
+
+}  // namespace placedb

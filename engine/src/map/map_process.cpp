@@ -1,0 +1,508 @@
+// One frame through the pipeline: features, quantisation, STM, likelihood, filter, memory
+// management, and one transaction that commits everything the frame changed.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <set>
+
+#include "features/image_conversion.h"
+#include "map/map_impl.h"
+#include "map/option_mapping.h"
+
+namespace placedb {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+storage::LinkRecord link(std::int64_t a, std::int64_t b, storage::LinkType type,
+                         std::optional<double> score = std::nullopt) {
+  return {std::min(a, b), std::max(a, b), type, score};
+}
+
+}  // namespace
+
+struct MapImpl::FrameWrite {
+  storage::FrameRecord frame;
+  std::optional<storage::LocationRecord> new_location;
+  std::vector<storage::WordRef> refs;              // the new location's signature
+  std::vector<std::uint8_t> keypoint_descriptors;  // the same keypoints' own descriptors
+  std::vector<storage::WordRecord> words;
+  std::vector<storage::LinkRecord> links;
+  std::optional<std::pair<std::int64_t, std::int64_t>> weight;  // location, new weight
+  std::vector<std::int64_t> to_wm, to_ltm;
+  std::optional<storage::HypothesisRecord> hypothesis;
+  std::optional<std::vector<std::int8_t>> place_code;       // the new location's
+  std::vector<std::uint8_t> place_coder;                    // the centres, once per map
+  std::vector<std::pair<std::int64_t, std::int64_t>> ages;  // locations entering STM/WM
+};
+
+FrameResult MapImpl::process(const cv::Mat& image, std::int64_t source_index,
+                             const std::string& source_path) {
+  requireSession("process");
+  const auto start = Clock::now();
+  cv::Mat grey;
+  try {
+    grey = toGrey8(image);
+  } catch (const Error& e) {
+    if (e.code() != ErrorCode::kInvalidArgument) throw;
+    StageTimes times;
+    times.features = times.total = msSince(start);
+    return recordBad(source_index, source_path, 0, times);  // empty or tiny: nothing to see
+  }
+  Features features = extractor_->extract(grey);
+  return processFeatures(features, source_index, source_path, msSince(start));
+}
+
+FrameResult MapImpl::recordUnreadable(std::int64_t source_index, const std::string& source_path) {
+  requireSession("recordUnreadable");
+  return recordBad(source_index, source_path, 0, StageTimes());
+}
+
+FrameResult MapImpl::recordBad(std::int64_t source_index, const std::string& source_path,
+                               std::size_t feature_count, const StageTimes& times) {
+  FrameResult r;
+  r.frame_id = counters_.next_frame_id++;
+  r.session_id = *session_id_;
+  r.source_index = source_index;
+  r.outcome = FrameOutcome::kBad;
+  r.feature_count = feature_count;
+  r.times = times;
+  r.hypothesis.rejected_reason = "bad frame";
+  FrameWrite w;
+  w.frame.id = r.frame_id;
+  w.frame.outcome = storage::FrameOutcome::kBad;
+  commit(w, r, source_path);
+  return r;
+}
+
+FrameResult MapImpl::processFeatures(const Features& features, std::int64_t source_index,
+                                     const std::string& source_path, double features_ms) {
+  const auto start = Clock::now() - std::chrono::duration_cast<Clock::duration>(
+                                        std::chrono::duration<double, std::milli>(features_ms));
+  StageTimes times;
+  times.features = features_ms;
+  const double mean_features =
+      counters_.feature_frames ? double(counters_.feature_sum) / counters_.feature_frames : 0.0;
+  if (features.size() == 0 || double(features.size()) < options_.bad_ratio * mean_features) {
+    times.total = msSince(start);
+    return recordBad(source_index, source_path, features.size(), times);
+  }
+  counters_.feature_sum += static_cast<std::int64_t>(features.size());
+  counters_.feature_frames += 1;
+
+  tiers_->beginFrame();
+  frame_code_.reset();
+  searched_back_.clear();
+  FrameResult r;
+  FrameWrite w;
+  r.frame_id = counters_.next_frame_id++;
+  r.session_id = *session_id_;
+  r.source_index = source_index;
+  r.feature_count = features.size();
+  w.frame.id = r.frame_id;
+
+  auto stage = Clock::now();
+  const Quantised q = quantise(features, r, w);
+  times.quantisation = msSince(stage);
+
+  placeInShortTermMemory(features, q, r, w);
+  stage = Clock::now();
+  searchLongTermMemory(features, w, r);
+  const double search_ms = msSince(stage);
+
+  stage = Clock::now();
+  auto similarities = index_.similarities(
+      q.signature, [this](LocationId id) { return tiers_->tierOf(id) == Tier::kWm; });
+  times.likelihood = msSince(stage);
+
+  stage = Clock::now();
+  FilterOutcome outcome = filter_->update(tiers_->wm(), similarities, graph_);
+  counters_.previous_score = filter_->state().previous_score;
+  const double update_ms = msSince(stage);
+  const std::int64_t hypothesis =
+      decideLoopClosure(outcome, features, q, similarities, r, w, times);
+  times.filter = msSince(stage);
+
+  stage = Clock::now();
+  // The time budget counts only the stages whose cost grows with memory.
+  manageMemory(hypothesis, search_ms + times.likelihood + update_ms, w, r);
+  times.memory = search_ms + msSince(stage);
+
+  r.times = times;
+  commit(w, r, source_path);
+  if (hypothesis != kNewPlace) r.hypothesis.frames = framesOf(hypothesis);
+  return r;
+}
+
+MapImpl::Quantised MapImpl::quantise(const Features& features, FrameResult& r, FrameWrite& w) {
+  Quantised out;
+  // Every feature gets a word; new words enter the index at once.
+  vocab::Quantization q = vocabulary_->quantize(features.descriptors, r.frame_id);
+  for (std::int64_t id : q.created_words)
+    w.words.push_back(storage::WordRecord::fromFloats(id, r.frame_id, vocabulary_->descriptor(id),
+                                                      vocabulary_->dim()));
+  std::vector<WordId> word_ids;
+  word_ids.reserve(q.word_of_feature.size());
+  for (std::int64_t id : q.word_of_feature)
+    if (id >= 0) word_ids.push_back(id);
+  out.signature = Signature::fromWords(word_ids);
+  r.words_created = q.created_words.size();
+  r.mean_quantisation_error = q.mean_error;
+  out.created_words = std::move(q.created_words);
+  out.word_of_feature = std::move(q.word_of_feature);
+  return out;
+}
+
+void MapImpl::placeInShortTermMemory(const Features& features, const Quantised& q, FrameResult& r,
+                                     FrameWrite& w) {
+  // Merge into the newest location when similar enough, else a new location.
+  std::int64_t previous = counters_.last_session == *session_id_ ? counters_.last_location : 0;
+  bool previous_live =
+      previous && tiers_->contains(previous) && tiers_->tierOf(previous) != Tier::kLtm;
+  if (previous_live && tiers_->tierOf(previous) == Tier::kStm &&
+      similarity(q.signature, index_.signatureOf(previous)) > options_.t_sim) {
+    r.outcome = FrameOutcome::kMerged;
+    r.location_id = previous;
+    tiers_->addWeight(previous, 1);
+    w.weight = {previous, tiers_->weightOf(previous)};
+    // The merged frame's own new words are referenced by no location: they leave the index.
+    vocabulary_->erase(q.created_words);
+  } else {
+    r.outcome = FrameOutcome::kNewLocation;
+    r.location_id = counters_.next_location_id++;
+    index_.add(r.location_id, q.signature);
+    graph_.addNode(r.location_id);
+    if (previous_live) {
+      graph_.addLink(previous, r.location_id);
+      w.links.push_back(link(previous, r.location_id, storage::LinkType::kNeighbour));
+    }
+    w.new_location =
+        storage::LocationRecord{r.location_id, *session_id_, 0, storage::Tier::kStm, r.frame_id};
+    w.refs.reserve(features.size());
+    cv::Mat kept;
+    for (std::size_t i = 0; i < features.size(); ++i) {
+      if (q.word_of_feature[i] < 0) continue;
+      const Keypoint& k = features.keypoints[i];
+      w.refs.push_back({q.word_of_feature[i], k.x, k.y, k.size, k.angle, k.response});
+      kept.push_back(features.descriptors.row(static_cast<int>(i)));
+    }
+    if (geometricCheckOn(options_) && features.descriptors.type() == CV_32F)
+      w.keypoint_descriptors = encodeDescriptors(kept);
+    storePlaceCode(r.location_id, features, w);
+    const auto overflow = tiers_->push(r.location_id);
+    w.ages.emplace_back(r.location_id, tiers_->ageOf(r.location_id));
+    enterWorkingMemory(overflow, w);
+    counters_.last_location = r.location_id;
+    counters_.last_session = *session_id_;
+  }
+  w.frame.outcome = r.outcome == FrameOutcome::kMerged ? storage::FrameOutcome::kMerged
+                                                       : storage::FrameOutcome::kNewLocation;
+  w.frame.location_id = r.location_id;
+}
+
+std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Features& features,
+                                        const Quantised& q,
+                                        const std::vector<LocationSimilarity>& similarities,
+                                        FrameResult& r, FrameWrite& w, StageTimes& times) {
+  // The reported hypothesis is chosen among the filter's best and its competitors by the
+  // geometric check.
+  const auto verify_start = Clock::now();
+  const Verified verified =
+      verifyHypothesis(outcome, features, q.word_of_feature, similarities, r.frame_id);
+  // Measuring the pose is part of verification; it never changes the decision.
+  std::optional<storage::ClosurePose> pose;
+  if (options_.hasIntrinsics() && verified.location != kNewPlace && outcome.accepted &&
+      verified.passed)
+    pose = closurePose(verified.location, verified.geometry);
+  times.verification = msSince(verify_start);
+  r.hypothesis.candidates_checked = verified.checked;
+  const std::int64_t hypothesis = verified.location;
+  std::string reason;
+  if (hypothesis != kNewPlace) {
+    r.hypothesis.location_id = hypothesis;
+    r.hypothesis.posterior = filter_->posteriorOf(hypothesis);
+    r.hypothesis.inliers = verified.inliers;
+    r.hypothesis.matches = verified.matches;
+    r.hypothesis.log10_nfa = verified.log10_nfa;
+    r.hypothesis.accepted = outcome.accepted && verified.passed;
+    // EVALUATION.md: the score is 0 where a check other than the final threshold rejected it.
+    const bool vetoed = !verified.passed || outcome.reason == RejectReason::kRatioTest;
+    r.hypothesis.score = vetoed ? 0.0 : outcome.score;
+    if (r.hypothesis.accepted) {
+      r.hypothesis.pose = pose;
+      acceptLoopClosure(hypothesis, verified, r, w);
+    }
+    if (!r.hypothesis.accepted) {
+      reason = verified.passed
+                   ? std::string(toString(outcome.reason))
+                   : fmt::format("geometry: {} inliers of {} matches, NFA 1e{:.1f}",
+                                 verified.inliers, verified.matches, verified.log10_nfa);
+    }
+  } else {
+    reason = toString(outcome.reason);
+  }
+  r.hypothesis.rejected_reason = reason;
+  storage::HypothesisRecord record;
+  record.frame_id = r.frame_id;
+  if (hypothesis != kNewPlace) record.best_location_id = hypothesis;
+  record.posterior = r.hypothesis.posterior;
+  record.loop_probability = r.hypothesis.score;
+  record.accepted = r.hypothesis.accepted;
+  record.rejected_reason = reason;
+  record.pose = r.hypothesis.pose;
+  w.hypothesis = record;
+  return hypothesis;
+}
+
+void MapImpl::acceptLoopClosure(std::int64_t hypothesis, const Verified& verified, FrameResult& r,
+                                FrameWrite& w) {
+  // Only a closure that passed on its own anchors the next ones: chains of temporal
+  // acceptances would drift along the graph while the camera moves on.
+  if (!verified.temporal)
+    counters_.closure_run = anchorAt(counters_.closure_run, hypothesis, r.frame_id, r.session_id,
+                                     verified.continues_run, toRunSettings(options_));
+  if (hypothesis != r.location_id) {
+    w.links.push_back(
+        link(r.location_id, hypothesis, storage::LinkType::kLoopClosure, r.hypothesis.score));
+    graph_.addLink(r.location_id, hypothesis, LinkKind::kLoopClosure);
+  }
+}
+
+std::optional<storage::ClosurePose> MapImpl::closurePose(std::int64_t hypothesis,
+                                                         const GeometricResult& geometry) {
+  const auto location = store_->location(hypothesis);
+  if (!location) return std::nullopt;
+  const CameraIntrinsics theirs = sessionIntrinsics(location->session_id);
+  if (!theirs.known()) return std::nullopt;
+  if (geometry.still) {
+    // The pairs did not move: no rotation, and no translation to give a direction to.
+    if (geometry.agreeing_query.empty()) return std::nullopt;
+    storage::ClosurePose pose;
+    pose.inliers = static_cast<std::int64_t>(geometry.agreeing_query.size());
+    return pose;
+  }
+  RelativePoseSettings settings;
+  settings.max_error_px = options_.geometry_max_error_px;
+  return relativePose(geometry.agreeing_query, intrinsicsOf(options_), geometry.agreeing_candidate,
+                      theirs, settings);
+}
+
+CameraIntrinsics MapImpl::sessionIntrinsics(std::int64_t session_id) {
+  if (session_id_ && session_id == *session_id_) return intrinsicsOf(options_);
+  if (auto known = session_intrinsics_.find(session_id); known != session_intrinsics_.end())
+    return known->second;
+  // Another session's camera, as it was set when that session began.
+  CameraIntrinsics camera;
+  try {
+    camera = intrinsicsOf(Options::fromSettings(store_->settings(session_id)));
+  } catch (const Error&) {
+    // Settings this binary cannot read: no camera, so no pose (the decision stands).
+  }
+  session_intrinsics_[session_id] = camera;
+  return camera;
+}
+
+void MapImpl::manageMemory(std::int64_t hypothesis, double memory_ms, FrameWrite& w,
+                           FrameResult& r) {
+  // Bring back the hypothesis' LTM neighbours, then bound WM.
+  const auto start = Clock::now();
+  if (hypothesis != kNewPlace) retrieveNeighbours(hypothesis, w, r);
+  transferToLtm(hypothesis, (memory_ms + msSince(start)) / 1000.0, w, r);
+}
+
+void MapImpl::enterWorkingMemory(const std::vector<std::int64_t>& ids, FrameWrite& write) {
+  write.to_wm.insert(write.to_wm.end(), ids.begin(), ids.end());
+}
+
+void MapImpl::retrieveNeighbours(std::int64_t hypothesis, FrameWrite& write, FrameResult& result) {
+  if (options_.max_retrieved <= 0 || tiers_->ltmSize() == 0) return;
+  // Nearest first: the hypothesis' own LTM links, then those of its live neighbours.
+  std::vector<std::int64_t> candidates = store_->linkedInTier(hypothesis, storage::Tier::kLtm);
+  for (std::int64_t n : graph_.neighbours(hypothesis)) {
+    if (candidates.size() >= static_cast<std::size_t>(options_.max_retrieved)) break;
+    auto more = store_->linkedInTier(n, storage::Tier::kLtm);
+    candidates.insert(candidates.end(), more.begin(), more.end());
+  }
+  bringBack(tiers_->retrievalCandidates(hypothesis, candidates), write, result);
+}
+
+void MapImpl::searchLongTermMemory(const Features& features, FrameWrite& write,
+                                   FrameResult& result) {
+  if (options_.ltm_search <= 0 || tiers_->ltmSize() == 0 || !coder_) return;
+  // The places most like this frame among WM and LTM; those in LTM come back before the
+  // likelihood, so the filter and the check see them in this very frame.
+  const auto code = frameCode(features);
+  const auto matches = places_.search(
+      code, static_cast<std::size_t>(options_.ltm_search),
+      [this](LocationId id) { return tiers_->contains(id) && tiers_->tierOf(id) != Tier::kStm; });
+  std::vector<std::int64_t> ids;
+  for (const PlaceMatch& m : matches)
+    if (tiers_->tierOf(m.location) == Tier::kLtm) ids.push_back(m.location);
+  bringBack(ids, write, result);
+  result.retrieved_by_search = ids.size();
+  searched_back_ = std::move(ids);  // loop candidates of this frame (candidate_choice.h)
+}
+
+void MapImpl::restoreWords(std::vector<std::int64_t> missing) {
+  std::sort(missing.begin(), missing.end());
+  missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
+  if (missing.empty()) return;
+  cv::Mat descriptors(static_cast<int>(missing.size()), vocabulary_->dim(), CV_32F);
+  std::vector<std::int64_t> created(missing.size());
+  store_->loadFloatDescriptors(missing, vocabulary_->dim(), descriptors.ptr<float>(),
+                               created.data());
+  vocabulary_->insert(missing, descriptors, created);
+}
+
+void MapImpl::bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write,
+                        FrameResult& result) {
+  if (ids.empty()) return;
+  auto refs = store_->loadWordRefs(ids);
+  std::vector<std::int64_t> missing;
+  for (std::int64_t id : ids) {
+    std::vector<WordId> words;
+    words.reserve(refs[id].size());
+    for (const auto& ref : refs[id]) words.push_back(ref.word_id);
+    for (WordId word : index_.add(id, Signature::fromWords(std::move(words))).referenced)
+      if (!vocabulary_->contains(word)) missing.push_back(word);
+  }
+  restoreWords(std::move(missing));
+  for (std::int64_t id : ids) {
+    graph_.addNode(id);
+    for (const auto& l : store_->links(id)) {
+      std::int64_t other = l.location_a == id ? l.location_b : l.location_a;
+      if (l.type != storage::LinkType::kMerge && graph_.hasNode(other))
+        graph_.addLink(id, other, linkKindOf(l.type));
+    }
+  }
+  tiers_->retrieveToWm(ids);
+  for (std::int64_t id : ids) write.ages.emplace_back(id, tiers_->ageOf(id));
+  write.to_wm.insert(write.to_wm.end(), ids.begin(), ids.end());
+  result.retrieved += ids.size();
+}
+
+void MapImpl::storePlaceCode(std::int64_t location_id, const Features& features,
+                             FrameWrite& write) {
+  if (features.descriptors.type() != CV_32F) return;
+  if (!coder_) {
+    // The first location a map stores fixes the coarse centres of every code after it.
+    coder_ = PlaceCoder::train(features.descriptors, PlaceCodeSettings());
+    write.place_coder = coder_->toBytes();
+  }
+  write.place_code = frameCode(features);
+  places_.add(location_id, *write.place_code);
+}
+
+const std::vector<std::int8_t>& MapImpl::frameCode(const Features& features) {
+  // One code per frame, shared by the new location and the LTM search.
+  if (!frame_code_) frame_code_ = coder_->encode(features.descriptors);
+  return *frame_code_;
+}
+
+void MapImpl::transferToLtm(std::int64_t hypothesis, double frame_seconds, FrameWrite& write,
+                            FrameResult& result) {
+  std::size_t planned = tiers_->plannedTransfers(frame_seconds);
+  if (planned == 0) return;
+  std::set<std::int64_t> immune;
+  if (hypothesis != kNewPlace) {
+    immune.insert(hypothesis);
+    for (std::int64_t n : graph_.neighbours(hypothesis)) immune.insert(n);
+  }
+  std::vector<std::int64_t> ids = tiers_->transferCandidates(planned, immune);
+  for (std::int64_t id : ids) {
+    leaveIndex(index_.remove(id));
+    graph_.removeNode(id);
+  }
+  tiers_->transferToLtm(ids);
+  write.to_ltm.insert(write.to_ltm.end(), ids.begin(), ids.end());
+  result.transferred = ids.size();
+}
+
+void MapImpl::leaveIndex(const WordChanges& changes) {
+  std::vector<std::int64_t> leaving;
+  leaving.reserve(changes.unreferenced.size());
+  for (std::int64_t word : changes.unreferenced)
+    if (!std::binary_search(imported_words_.begin(), imported_words_.end(), word))
+      leaving.push_back(word);
+  if (!leaving.empty()) vocabulary_->erase(leaving);
+}
+
+void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_path) {
+  const auto stage = Clock::now();
+  r.vocabulary_size = vocabulary_->size();
+  r.stm_size = tiers_->stm().size();
+  r.wm_size = tiers_->wmSize();
+
+  w.frame.session_id = r.session_id;
+  w.frame.source_index = r.source_index;
+  w.frame.source_path = source_path;
+  w.frame.stats = {
+      static_cast<std::int64_t>(r.feature_count),   static_cast<std::int64_t>(r.words_created),
+      static_cast<std::int64_t>(r.vocabulary_size), static_cast<std::int64_t>(r.wm_size),
+      static_cast<std::int64_t>(r.stm_size),        r.mean_quantisation_error};
+  try {
+    auto tx = store_->begin();
+    if (!w.words.empty()) store_->insertWords(w.words);
+    if (w.new_location) {
+      store_->insertLocation(*w.new_location);
+      if (w.place_code) store_->putPlaceCode(w.new_location->id, *w.place_code);
+      store_->insertWordRefs(w.new_location->id, w.refs);
+      if (!w.keypoint_descriptors.empty())
+        store_->putState(keypointDescriptorsKey(w.new_location->id), w.keypoint_descriptors);
+    }
+    if (w.frame.location_id) store_->addCoveredFrame(*w.frame.location_id, r.frame_id);
+    if (w.weight) store_->updateWeight(w.weight->first, w.weight->second);
+    for (const auto& l : w.links) store_->insertLink(l.location_a, l.location_b, l.type, l.score);
+    if (!w.to_wm.empty()) store_->setTier(w.to_wm, storage::Tier::kWm);
+    if (!w.to_ltm.empty()) store_->setTier(w.to_ltm, storage::Tier::kLtm);
+    if (!w.ages.empty()) store_->setWmAges(w.ages);
+    if (!w.place_coder.empty()) store_->putState(kPlaceCoderKey, w.place_coder);
+    if (w.hypothesis) store_->insertHypothesis(*w.hypothesis);
+    if (w.frame.outcome != storage::FrameOutcome::kBad)
+      store_->putPosterior(filter_->state().posterior);
+    counters_.next_wm_age = tiers_->nextAge();
+    counters_.save(*store_);
+    vocabulary_state_.save(*store_, *vocabulary_);
+    // The frame's row goes last (foreign keys are checked at commit) so that its storage_ms
+    // holds the time of every other write of the frame; only this insert and the COMMIT (a WAL
+    // append, no fsync under synchronous=NORMAL) are missing from it. The log's storage time,
+    // taken after the commit, has them.
+    const auto& t = r.times;
+    const double storage_ms = msSince(stage);
+    w.frame.timings = {
+        t.features,
+        t.quantisation,
+        t.likelihood,
+        t.filter,
+        t.memory,
+        storage_ms,
+        t.features + t.quantisation + t.likelihood + t.filter + t.memory + storage_ms};
+    store_->insertFrame(w.frame);
+    tx.commit();
+  } catch (...) {
+    broken_ = true;  // RAM is one frame ahead of the file now
+    throw;
+  }
+  r.times.storage = msSince(stage);
+  r.times.total = r.times.features + r.times.quantisation + r.times.likelihood + r.times.filter +
+                  r.times.memory + r.times.storage;
+}
+
+std::vector<FrameRef> MapImpl::framesOf(std::int64_t location_id) const {
+  std::vector<FrameRef> out;
+  for (std::int64_t frame_id : store_->coveredFrames(location_id)) {
+    auto f = store_->frame(frame_id);
+    if (!f) continue;
+    out.push_back({f->id, f->session_id, f->source_index, f->source_path});
+  }
+  std::sort(out.begin(), out.end(),
+            [](const FrameRef& a, const FrameRef& b) { return a.frame_id < b.frame_id; });
+  return out;
+}
+
+}  // namespace placedb

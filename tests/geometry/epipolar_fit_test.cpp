@@ -1,0 +1,117 @@
+// The a-contrario epipolar decision: correspondences without a common geometry never pass,
+// whatever their number; a rigid scene seen from two poses passes, with few pairs too, at
+// 240x192 and at 160x128.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "geometry/epipolar_fit.h"
+
+namespace placedb {
+namespace {
+
+struct Pairs {
+  std::vector<cv::Point2f> a, b;
+};
+
+Pairs noise(int n, cv::Size2f size, std::mt19937& rng) {
+  std::uniform_real_distribution<float> x(0.f, size.width), y(0.f, size.height);
+  Pairs p;
+  for (int i = 0; i < n; ++i) {
+    p.a.emplace_back(x(rng), y(rng));
+    p.b.emplace_back(x(rng), y(rng));
+  }
+  return p;
+}
+
+// n points 4..12 m ahead seen by a pinhole camera (focal length 0.8 x width) before and after
+// a sideways step and a small turn, with Gaussian keypoint noise; the first `outliers` pairs'
+// candidate points are moved anywhere.
+Pairs rigid(int n, int outliers, cv::Size2f size, float noise_px, std::mt19937& rng) {
+  std::uniform_real_distribution<float> x(-2.f, 2.f), y(-1.5f, 1.5f), z(4.f, 12.f);
+  std::uniform_real_distribution<float> u(0.f, size.width), v(0.f, size.height);
+  std::normal_distribution<float> jitter(0.f, noise_px);
+  const float f = 0.8f * size.width, cx = size.width / 2, cy = size.height / 2;
+  const float turn = 0.05f, c = std::cos(turn), s = std::sin(turn);
+  Pairs p;
+  while (static_cast<int>(p.a.size()) < n) {
+    const cv::Point3f q(x(rng), y(rng), z(rng));
+    const cv::Point3f r(c * (q.x - 0.6f) + s * q.z, q.y, -s * (q.x - 0.6f) + c * q.z);
+    const cv::Point2f pa(cx + f * q.x / q.z + jitter(rng), cy + f * q.y / q.z + jitter(rng));
+    const cv::Point2f pb(cx + f * r.x / r.z + jitter(rng), cy + f * r.y / r.z + jitter(rng));
+    if (pa.x < 0 || pa.y < 0 || pa.x > size.width || pa.y > size.height || pb.x < 0 || pb.y < 0 ||
+        pb.x > size.width || pb.y > size.height)
+      continue;
+    p.a.push_back(pa);
+    p.b.push_back(pb);
+  }
+  for (int i = 0; i < outliers && i < n; ++i) p.b[static_cast<std::size_t>(i)] = {u(rng), v(rng)};
+  return p;
+}
+
+TEST(EpipolarFit, PureNoiseNeverPassesAtAnyMatchCount) {
+  const EpipolarFitSettings settings;
+  for (cv::Size2f size : {cv::Size2f(240, 192), cv::Size2f(160, 128), cv::Size2f(960, 540)}) {
+    for (int n : {8, 9, 10, 12, 15, 20, 30, 50, 100, 200, 400}) {
+      for (unsigned seed = 1; seed <= 5; ++seed) {
+        std::mt19937 rng(seed * 1000 + static_cast<unsigned>(n));
+        const Pairs p = noise(n, size, rng);
+        const EpipolarFit fit = fitEpipolar(p.a, p.b, size, settings);
+        EXPECT_FALSE(fit.passed) << size.width << "x" << size.height << " n " << n << " seed "
+                                 << seed << ": " << fit.inliers << " inliers, log10 NFA "
+                                 << fit.log10_nfa;
+      }
+    }
+  }
+}
+
+TEST(EpipolarFit, ARigidScenePassesWithFewOrManyPairs) {
+  EpipolarFitSettings settings;
+  settings.stop_when_passed = false;  // the best model, to look at its inliers
+  for (cv::Size2f size : {cv::Size2f(240, 192), cv::Size2f(160, 128)}) {
+    for (int n : {10, 12, 20, 60, 200}) {
+      std::mt19937 rng(static_cast<unsigned>(n));
+      const Pairs p = rigid(n, 0, size, 0.3f, rng);
+      const EpipolarFit fit = fitEpipolar(p.a, p.b, size, settings);
+      EXPECT_TRUE(fit.passed) << size.width << " n " << n << ": log10 NFA " << fit.log10_nfa;
+      EXPECT_GE(fit.inliers, n - 2) << size.width << " n " << n;
+    }
+  }
+}
+
+TEST(EpipolarFit, ARigidSceneAmongOutliersPasses) {
+  const cv::Size2f size(240, 192);
+  std::mt19937 rng(3);
+  // 25 true pairs among 60: the ratio a fixed count of 13 inliers already let through.
+  const Pairs p = rigid(60, 35, size, 0.3f, rng);
+  EpipolarFitSettings settings;
+  settings.iterations = 2000;
+  const EpipolarFit fit = fitEpipolar(p.a, p.b, size, settings);
+  EXPECT_TRUE(fit.passed) << "log10 NFA " << fit.log10_nfa << ", " << fit.inliers << " inliers";
+  EXPECT_GE(fit.inliers, 20);
+}
+
+TEST(EpipolarFit, TheChanceLevelFollowsTheEvidence) {
+  const cv::Size2f size(240, 192);
+  // The same agreement is worth less among more pairs, at a larger distance, on a smaller image.
+  EXPECT_LT(epipolarLog10Nfa(20, 12, 1.0, size, 400), epipolarLog10Nfa(60, 12, 1.0, size, 400));
+  EXPECT_LT(epipolarLog10Nfa(20, 12, 0.5, size, 400), epipolarLog10Nfa(20, 12, 2.0, size, 400));
+  EXPECT_LT(epipolarLog10Nfa(20, 12, 1.0, cv::Size2f(960, 540), 400),
+            epipolarLog10Nfa(20, 12, 1.0, size, 400));
+  EXPECT_LT(epipolarLog10Nfa(20, 15, 1.0, size, 400), epipolarLog10Nfa(20, 12, 1.0, size, 400));
+  EXPECT_GT(epipolarLog10Nfa(8, 8, 1.0, size, 400), 0) << "8 pairs are 1 beyond a sample";
+}
+
+TEST(EpipolarFit, IsDeterministic) {
+  const cv::Size2f size(240, 192);
+  std::mt19937 rng(9);
+  const Pairs p = rigid(50, 20, size, 0.5f, rng);
+  const EpipolarFit a = fitEpipolar(p.a, p.b, size, EpipolarFitSettings());
+  const EpipolarFit b = fitEpipolar(p.a, p.b, size, EpipolarFitSettings());
+  EXPECT_EQ(a.inliers, b.inliers);
+  EXPECT_EQ(a.log10_nfa, b.log10_nfa);
+  EXPECT_EQ(a.inlier_pairs, b.inlier_pairs);
+}
+
+}  // namespace
+}  // namespace placedb
