@@ -134,6 +134,33 @@ TEST(SurfBehaviour, UprightGivesAngleMinusOne) {
   }
 }
 
+TEST(SurfBehaviour, FeatureTargetSearchesASmallImageAgainAtTwiceItsSize) {
+  cv::Mat small;
+  cv::resize(testImage(), small, cv::Size(), 0.375, 0.375, cv::INTER_AREA);
+  const Features native = surfOf(small);
+  FeatureOptions options;
+  options.feature_target = static_cast<int>(native.size()) + 40;
+  const Features finer = surfOf(small, options);
+  EXPECT_GT(finer.size(), native.size());
+  EXPECT_LE(finer.size(), static_cast<std::size_t>(options.feature_target));
+  // In the given image's own pixels, so that the check and a pose see that image.
+  for (const Keypoint& k : finer.keypoints) {
+    EXPECT_GE(k.x, 0.f);
+    EXPECT_LT(k.x, static_cast<float>(small.cols));
+    EXPECT_GE(k.y, 0.f);
+    EXPECT_LT(k.y, static_cast<float>(small.rows));
+  }
+  EXPECT_TRUE(bitIdentical(finer, surfOf(small, options)));
+}
+
+TEST(SurfBehaviour, FeatureTargetLeavesAnImageWithEnoughFeaturesAlone) {
+  const cv::Mat image = testImage();
+  const Features plain = surfOf(image);
+  FeatureOptions options;
+  options.feature_target = static_cast<int>(plain.size());
+  EXPECT_TRUE(bitIdentical(plain, surfOf(image, options)));
+}
+
 TEST(SurfBehaviour, FlatImageGivesNoFeatures) {
   const Features features = surfOf(cv::Mat(120, 160, CV_8UC1, cv::Scalar(128)));
   EXPECT_EQ(features.size(), 0u);

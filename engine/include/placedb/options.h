@@ -48,6 +48,7 @@ struct Options {
   int intervals = 2;              // SURF intervals (layers) per octave
   bool upright = false;           // U-SURF: no orientation
   int max_features = 600;         // strongest kept; 0 keeps all
+  int feature_target = 0;         // fewer: detect again at twice the image size; 0 = off
   double min_response = 0;        // features under this response are dropped
   double bad_ratio = 0.25;        // fewer features than this x running mean: a bad frame
 

@@ -152,6 +152,9 @@ const std::vector<Row>& table() {
       boolean("upright", &Options::upright, "U-SURF: skip orientation (camera never rolls)"),
       integer("max_features", &Options::max_features, 0, 100000, "0..100000",
               "strongest features kept per image, 0 = all"),
+      integer("feature_target", &Options::feature_target, 0, 100000, "0..100000",
+              "SURF: fewer features than this and the image is searched again at twice its size, "
+              "0 = off"),
       real("min_response", &Options::min_response, 0, 1e30, "0..1e30",
            "features with a weaker detector response are dropped"),
       real("bad_ratio", &Options::bad_ratio, 0, 1, "0..1",

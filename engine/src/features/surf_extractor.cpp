@@ -1,5 +1,9 @@
 #include "features/surf_extractor.h"
 
+#include <algorithm>
+
+#include <opencv2/imgproc.hpp>
+
 #include "features/image_conversion.h"
 #include "features/integral_image.h"
 #include "features/keypoint_ranking.h"
@@ -19,9 +23,8 @@ const std::string& SurfExtractor::name() const {
 
 int SurfExtractor::dim() const { return kSurfDescriptorDim; }
 
-Features SurfExtractor::extract(const cv::Mat& grey8) const {
-  requireExtractableImage(grey8, name());
-  const int threads = resolveThreadCount(options_.threads);
+std::vector<cv::KeyPoint> SurfExtractor::detect(const cv::Mat& grey8, int max_features, int threads,
+                                                cv::Mat& descriptors) const {
   const IntegralImage integral(grey8);
   SurfDetectorSettings detector;
   detector.hessian_threshold = options_.hessian_threshold;
@@ -32,12 +35,41 @@ Features SurfExtractor::extract(const cv::Mat& grey8) const {
   const std::vector<cv::KeyPoint> blobs = detectSurfBlobs(integral, detector);
 
   // Rank before describing so that max_features also saves the descriptor work.
-  const std::vector<int> kept = rankKeypoints(blobs, options_.max_features, options_.min_response);
+  const std::vector<int> kept = rankKeypoints(blobs, max_features, options_.min_response);
   std::vector<cv::KeyPoint> keypoints;
   keypoints.reserve(kept.size());
   for (int index : kept) keypoints.push_back(blobs[index]);
-  cv::Mat descriptors;
   describeSurfKeypoints(integral, keypoints, options_.upright, threads, descriptors);
+  return keypoints;
+}
+
+Features SurfExtractor::extract(const cv::Mat& grey8) const {
+  requireExtractableImage(grey8, name());
+  const int threads = resolveThreadCount(options_.threads);
+  cv::Mat descriptors;
+  std::vector<cv::KeyPoint> keypoints = detect(grey8, options_.max_features, threads, descriptors);
+  if (options_.feature_target > 0 && static_cast<int>(keypoints.size()) < options_.feature_target) {
+    // Too few blobs at the detector's finest scale: look again on the image doubled (Lowe's
+    // first octave), where blobs of 1-2 pixels become detectable. Keypoints come back in this
+    // image's own pixels, so the check and a pose see the image the caller gave.
+    cv::Mat doubled;
+    cv::resize(grey8, doubled, cv::Size(), 2.0, 2.0, cv::INTER_LINEAR);
+    // At most the target: enough for the check, without the cost and the chance agreements of
+    // four times the features.
+    const int cap = options_.max_features > 0
+                        ? std::min(options_.max_features, options_.feature_target)
+                        : options_.feature_target;
+    cv::Mat finer;
+    std::vector<cv::KeyPoint> more = detect(doubled, cap, threads, finer);
+    if (more.size() > keypoints.size()) {
+      for (cv::KeyPoint& k : more) {
+        k.pt *= 0.5f;
+        k.size *= 0.5f;
+      }
+      keypoints = std::move(more);
+      descriptors = finer;
+    }
+  }
   return makeFeatures(name(), type(), dim(), keypoints, descriptors, 0, 0.0f);
 }
 

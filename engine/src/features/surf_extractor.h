@@ -1,6 +1,9 @@
 #pragma once
 // Our SURF-64 behind the FeatureExtractor interface.
 #include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
 
 #include "features/feature_extractor.h"
 
@@ -17,6 +20,10 @@ class SurfExtractor : public FeatureExtractor {
   DescriptorType type() const override { return DescriptorType::kFloat32; }
 
  private:
+  // Detected, ranked and described keypoints of one image, in its own pixels.
+  std::vector<cv::KeyPoint> detect(const cv::Mat& grey8, int max_features, int threads,
+                                   cv::Mat& descriptors) const;
+
   FeatureOptions options_;
 };
 

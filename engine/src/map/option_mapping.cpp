@@ -10,6 +10,7 @@ FeatureOptions toFeatureOptions(const Options& o) {
   f.intervals = o.intervals;
   f.upright = o.upright;
   f.max_features = o.max_features;
+  f.feature_target = o.feature_target;
   f.min_response = static_cast<float>(o.min_response);
   f.threads = 1;  // the engine's threads go to the pipeline, and results never depend on them
   return f;
