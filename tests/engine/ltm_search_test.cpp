@@ -35,7 +35,7 @@ class LtmSearchTest : public SamplesMapTest {
 
 TEST_F(LtmSearchTest, QueryFindsPlacesThatMovedToLongTermMemory) {
   Options options;
-  options.wm_max = 8;
+  options.wm_max = 7;
   mapFirst(44, options);
   ASSERT_GE(sqlCount(path_, "SELECT count(*) FROM locations WHERE tier = 2"), 10);
   const std::string before = readBytes(path_);

@@ -170,5 +170,15 @@ TEST(Options, ChoicesKeepTheirTextAndRefuseAnyOther) {
   EXPECT_THROW(cast.validate(), Error);
 }
 
+TEST(Options, StoredSettingsWithoutALaterSettingKeepWhatTheSessionRan) {
+  // A session stored before feature_target existed searched every image once.
+  auto stored = Options().toSettings();
+  stored.erase("feature_target");
+  EXPECT_EQ(Options::fromStoredSettings(stored).feature_target, 0);
+  EXPECT_EQ(Options::fromSettings(stored).feature_target, Options().feature_target);
+  stored["feature_target"] = "100";
+  EXPECT_EQ(Options::fromStoredSettings(stored).feature_target, 100);
+}
+
 }  // namespace
 }  // namespace placedb

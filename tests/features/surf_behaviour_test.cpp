@@ -134,14 +134,15 @@ TEST(SurfBehaviour, UprightGivesAngleMinusOne) {
   }
 }
 
-TEST(SurfBehaviour, FeatureTargetSearchesASmallImageAgainAtTwiceItsSize) {
+TEST(SurfBehaviour, FeatureTargetSearchesAStarvedImageAgainAtTwiceItsSize) {
   cv::Mat small;
   cv::resize(testImage(), small, cv::Size(), 0.375, 0.375, cv::INTER_AREA);
-  const Features native = surfOf(small);
   FeatureOptions options;
-  options.feature_target = static_cast<int>(native.size()) + 40;
+  options.feature_target = 0;
+  const Features native = surfOf(small, options);
+  options.feature_target = 2 * static_cast<int>(native.size()) + 20;
   const Features finer = surfOf(small, options);
-  EXPECT_GT(finer.size(), native.size());
+  EXPECT_GE(finer.size(), 2 * native.size());
   EXPECT_LE(finer.size(), static_cast<std::size_t>(options.feature_target));
   // In the given image's own pixels, so that the check and a pose see that image.
   for (const Keypoint& k : finer.keypoints) {
@@ -153,11 +154,12 @@ TEST(SurfBehaviour, FeatureTargetSearchesASmallImageAgainAtTwiceItsSize) {
   EXPECT_TRUE(bitIdentical(finer, surfOf(small, options)));
 }
 
-TEST(SurfBehaviour, FeatureTargetLeavesAnImageWithEnoughFeaturesAlone) {
+TEST(SurfBehaviour, FeatureTargetLeavesAnImageWithOverHalfOfItAlone) {
   const cv::Mat image = testImage();
-  const Features plain = surfOf(image);
   FeatureOptions options;
-  options.feature_target = static_cast<int>(plain.size());
+  options.feature_target = 0;
+  const Features plain = surfOf(image, options);
+  options.feature_target = 2 * static_cast<int>(plain.size()) - 1;  // more than half of it
   EXPECT_TRUE(bitIdentical(plain, surfOf(image, options)));
 }
 

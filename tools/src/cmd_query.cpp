@@ -29,7 +29,7 @@ Options storedOptions(const std::string& map_path) {
   if (!last)
     throw Error(ErrorCode::kInvalidArgument,
                 fmt::format("map {} has no session yet: map a sequence first", map_path));
-  return Options::fromSettings(store.settings(last->id));
+  return Options::fromStoredSettings(store.settings(last->id));
 }
 
 nlohmann::json framesJson(const std::vector<FrameRef>& frames) {

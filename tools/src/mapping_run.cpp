@@ -105,7 +105,7 @@ MappingSummary runMapping(const MappingRequest& request) {
   std::optional<ResumePoint> resume = decision.resume;
   if (resume) {
     // The session continues with the settings it started with, so its results stay exact.
-    options = Options::fromSettings(resume->settings);
+    options = Options::fromStoredSettings(resume->settings);
     if (!request.settings.empty())
       printWarning(
           fmt::format("resuming session {}: it keeps the settings it started with; "

@@ -48,7 +48,7 @@ struct Options {
   int intervals = 2;              // SURF intervals (layers) per octave
   bool upright = false;           // U-SURF: no orientation
   int max_features = 600;         // strongest kept; 0 keeps all
-  int feature_target = 0;         // fewer: detect again at twice the image size; 0 = off
+  int feature_target = 100;       // half as many or fewer: detect again at twice the size
   double min_response = 0;        // features under this response are dropped
   double bad_ratio = 0.25;        // fewer features than this x running mean: a bad frame
 
@@ -126,6 +126,9 @@ struct Options {
   static Options fromSettings(const std::map<std::string, std::string>& settings,
                               const Options& base);
   static Options fromSettings(const std::map<std::string, std::string>& settings);
+  // A session's settings as a map stored them: a setting added after that session began takes
+  // the value that reproduces it (feature_target 0), so a resumed session decides as it did.
+  static Options fromStoredSettings(const std::map<std::string, std::string>& settings);
   std::map<std::string, std::string> toSettings() const;
   void validate() const;
 

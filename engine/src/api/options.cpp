@@ -153,8 +153,8 @@ const std::vector<Row>& table() {
       integer("max_features", &Options::max_features, 0, 100000, "0..100000",
               "strongest features kept per image, 0 = all"),
       integer("feature_target", &Options::feature_target, 0, 100000, "0..100000",
-              "SURF: fewer features than this and the image is searched again at twice its size, "
-              "0 = off"),
+              "SURF: an image with at most half this many features is searched again at twice "
+              "its size, keeping at most this many; 0 = off"),
       real("min_response", &Options::min_response, 0, 1e30, "0..1e30",
            "features with a weaker detector response are dropped"),
       real("bad_ratio", &Options::bad_ratio, 0, 1, "0..1",
@@ -303,6 +303,12 @@ Options Options::fromSettings(const std::map<std::string, std::string>& settings
 
 Options Options::fromSettings(const std::map<std::string, std::string>& settings) {
   return fromSettings(settings, Options());
+}
+
+Options Options::fromStoredSettings(const std::map<std::string, std::string>& settings) {
+  Options before;
+  before.feature_target = 0;
+  return fromSettings(settings, before);
 }
 
 std::map<std::string, std::string> Options::toSettings() const {

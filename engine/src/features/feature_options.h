@@ -36,9 +36,9 @@ struct FeatureOptions {
   // Keep at most this many features, strongest response first; 0 keeps all (ORB: 0 means 1000,
   // because OpenCV's ORB needs a cap). Range [0, 1000000].
   int max_features = Options().max_features;
-  // SURF: an image that gives fewer features than this is searched again at twice its size, and
-  // the finer search's features are kept when there are more of them. 0 turns it off.
-  // Range [0, 1000000].
+  // SURF: an image with at most half this many features is searched again at twice its size,
+  // and at most this many of the finer features are kept when they at least double the count.
+  // 0 turns it off. Range [0, 1000000].
   int feature_target = Options().feature_target;
   // Drop features whose detector response is below this (in each detector's own units).
   // Range: [0, 1e30].

@@ -48,20 +48,19 @@ Features SurfExtractor::extract(const cv::Mat& grey8) const {
   const int threads = resolveThreadCount(options_.threads);
   cv::Mat descriptors;
   std::vector<cv::KeyPoint> keypoints = detect(grey8, options_.max_features, threads, descriptors);
-  if (options_.feature_target > 0 && static_cast<int>(keypoints.size()) < options_.feature_target) {
-    // Too few blobs at the detector's finest scale: look again on the image doubled (Lowe's
-    // first octave), where blobs of 1-2 pixels become detectable. Keypoints come back in this
-    // image's own pixels, so the check and a pose see the image the caller gave.
+  // Too few blobs at the detector's finest scale: look again on the image doubled (Lowe's first
+  // octave), where blobs of one or two pixels become detectable. Four times the area costs four
+  // times the detection, so it is done only where it can at least double the count, up to the
+  // target: an image with half the target or fewer. Keypoints come back in this image's own
+  // pixels, so the check and a pose see the image the caller gave.
+  const int target = options_.feature_target;
+  if (target > 0 && 2 * keypoints.size() <= static_cast<std::size_t>(target)) {
     cv::Mat doubled;
     cv::resize(grey8, doubled, cv::Size(), 2.0, 2.0, cv::INTER_LINEAR);
-    // At most the target: enough for the check, without the cost and the chance agreements of
-    // four times the features.
-    const int cap = options_.max_features > 0
-                        ? std::min(options_.max_features, options_.feature_target)
-                        : options_.feature_target;
+    const int cap = options_.max_features > 0 ? std::min(options_.max_features, target) : target;
     cv::Mat finer;
     std::vector<cv::KeyPoint> more = detect(doubled, cap, threads, finer);
-    if (more.size() > keypoints.size()) {
+    if (more.size() >= 2 * keypoints.size()) {
       for (cv::KeyPoint& k : more) {
         k.pt *= 0.5f;
         k.size *= 0.5f;

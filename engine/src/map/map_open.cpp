@@ -248,7 +248,7 @@ SessionInfo MapImpl::resumeSession(std::int64_t session_id) {
                 fmt::format("{}: only the last session can be resumed (asked {}, last is {})",
                             store_->path(), session_id, last ? last->id : 0));
   // The session continues with the settings it started with, so its results stay exact.
-  Options stored = Options::fromSettings(store_->settings(session_id));
+  Options stored = Options::fromStoredSettings(store_->settings(session_id));
   if (stored.toSettings() != options_.toSettings()) {
     configure(stored);
     restoreFromStore();

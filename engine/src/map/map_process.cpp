@@ -299,7 +299,7 @@ CameraIntrinsics MapImpl::sessionIntrinsics(std::int64_t session_id) {
   // Another session's camera, as it was set when that session began.
   CameraIntrinsics camera;
   try {
-    camera = intrinsicsOf(Options::fromSettings(store_->settings(session_id)));
+    camera = intrinsicsOf(Options::fromStoredSettings(store_->settings(session_id)));
   } catch (const Error&) {
     // Settings this binary cannot read: no camera, so no pose (the decision stands).
   }
