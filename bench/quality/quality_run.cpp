@@ -81,7 +81,7 @@ int main(int argc, char** argv) {
     std::ofstream log(log_path);
     log << "frame,candidate_frames,score,accepted,time_ms,location,outcome,hypothesis,"
            "posterior,reason,words,quantisation_error,inliers,matches,verification_ms,"
-           "candidates_checked,filter_ms,log10_nfa\n";
+           "candidates_checked,filter_ms,log10_nfa,evidence_frames\n";
     std::vector<double> times;
     double error_sum = 0;
     std::size_t error_features = 0, vocabulary = 0;
@@ -94,14 +94,15 @@ int main(int argc, char** argv) {
       error_features += r.outcome == placedb::FrameOutcome::kBad ? 0 : r.feature_count;
       vocabulary = r.vocabulary_size;
       log << fmt::format(
-          "{},{},{:.17g},{},{:.3f},{},{},{},{:.6g},\"{}\",{},{:.6g},{},{},{:.3f},{},{:.3f},{:.2f}"
+          "{},{},{:.17g},{},{:.3f},{},{},{},{:.6g},\"{}\",{},{:.6g},{},{},{:.3f},{},{:.3f},{:.2f},{"
+          "}"
           "\n",
           i, candidatesOf(r), r.hypothesis.score, r.hypothesis.accepted ? 1 : 0, r.times.total,
           r.location_id, static_cast<int>(r.outcome), r.hypothesis.location_id,
           r.hypothesis.posterior, r.hypothesis.rejected_reason, r.feature_count,
           r.mean_quantisation_error, r.hypothesis.inliers, r.hypothesis.matches,
           r.times.verification, r.hypothesis.candidates_checked, r.times.filter,
-          r.hypothesis.log10_nfa);
+          r.hypothesis.log10_nfa, r.hypothesis.evidence_frames);
     }
     map->close();
     double mean = 0;

@@ -50,6 +50,10 @@ struct Hypothesis {
   int matches = 0;              // ... among this many correspondences
   double log10_nfa = 0;         // the check's false alarms, log10 (0: no check; 99: no model)
   int candidates_checked = 0;   // locations the geometric check ran on this frame
+  // Frames whose checks the decision combined: 1 = this frame's alone, more when a run of
+  // frames matching consecutive places passed together (SPEC's terms: bench/quality/README.md);
+  // 0 when no check ran.
+  int evidence_frames = 0;
   // An accepted closure's relative pose (this frame's camera in the location's) when the
   // session and the location's session have camera intrinsics (Options::fx ...); none otherwise.
   std::optional<storage::ClosurePose> pose;

@@ -28,6 +28,13 @@ void EngineCounters::save(storage::MapStore& store) const {
                       {"last_closure_session", closure_run.session},
                       {"closure_run_first", closure_run.first},
                       {"closure_run_heading", closure_run.heading},
+                      {"evidence_location", closure_evidence.location},
+                      {"evidence_frame", closure_evidence.frame},
+                      {"evidence_session", closure_evidence.session},
+                      {"evidence_log10_nfa", closure_evidence.log10_nfa},
+                      {"evidence_log10_product", closure_evidence.log10_product},
+                      {"evidence_log10_alternatives", closure_evidence.log10_alternatives},
+                      {"evidence_frames", closure_evidence.frames},
                       {"next_wm_age", next_wm_age}};
   store.putState(kCountersKey, j.dump());
 }
@@ -51,6 +58,14 @@ bool EngineCounters::load(const storage::MapStore& store) {
     // Absent from maps made before runs had a heading: a run of one closure.
     closure_run.first = j.value("closure_run_first", closure_run.anchor);
     closure_run.heading = j.value("closure_run_heading", 0);
+    // Absent from maps made before evidence added up over frames: no run to continue.
+    closure_evidence.location = j.value("evidence_location", std::int64_t{0});
+    closure_evidence.frame = j.value("evidence_frame", std::int64_t{0});
+    closure_evidence.session = j.value("evidence_session", std::int64_t{0});
+    closure_evidence.log10_nfa = j.value("evidence_log10_nfa", 0.0);
+    closure_evidence.log10_product = j.value("evidence_log10_product", 0.0);
+    closure_evidence.log10_alternatives = j.value("evidence_log10_alternatives", 0.0);
+    closure_evidence.frames = j.value("evidence_frames", 0);
     // Absent from maps made before schema 4, whose ages were the location ids.
     next_wm_age = j.value("next_wm_age", next_location_id);
   } catch (const nlohmann::json::exception& e) {

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "decision/closure_evidence.h"
 #include "decision/closure_run.h"
 #include "placedb/storage/map_store.h"
 #include "vocabulary/vocabulary.h"
@@ -16,11 +17,12 @@ struct EngineCounters {
   std::int64_t next_location_id = 1;
   std::int64_t feature_sum = 0;  // features over good frames: the bad-frame running mean
   std::int64_t feature_frames = 0;
-  std::int64_t last_location = 0;  // newest location of the current session, 0 = none
-  std::int64_t last_session = 0;   // session that last_location belongs to
-  double previous_score = 0;       // the filter's ratio-test memory
-  ClosureRun closure_run;          // the loop closures a revisit is making
-  std::int64_t next_wm_age = 1;    // the memory tiers' age clock (next_location_id on older maps)
+  std::int64_t last_location = 0;    // newest location of the current session, 0 = none
+  std::int64_t last_session = 0;     // session that last_location belongs to
+  double previous_score = 0;         // the filter's ratio-test memory
+  ClosureRun closure_run;            // the loop closures a revisit is making
+  ClosureEvidence closure_evidence;  // the check's evidence over the newest frames
+  std::int64_t next_wm_age = 1;      // the memory tiers' age clock (next_location_id on older maps)
 
   void save(storage::MapStore& store) const;
   // False when the map holds no engine state yet (a new map).

@@ -106,6 +106,8 @@ class MapImpl final : public Map {
     int checked = 0;             // candidates the check ran on
     double log10_nfa = 0;        // the reported candidate's number of false alarms, log10
     GeometricResult geometry;    // the reported candidate's check (its agreeing pairs)
+    ClosureEvidence evidence;    // the check's evidence over the frames up to this one
+    bool by_evidence = false;    // passed as a run of frames, not as this frame alone
   };
   // Links the frame's location to the accepted closure; one that passed on its own anchors the
   // closure run (closure_run.h).
@@ -118,6 +120,11 @@ class MapImpl final : public Map {
   // The WM locations that continue the closure run at this frame (closure_run.h), sorted; empty
   // when temporal consistency is off or the frame continues no run.
   std::vector<LocationId> nearLastClosure(std::int64_t frame_id) const;
+  // The WM locations within reach of the last frame's match, sorted; empty when this frame does
+  // not follow it or the check has no chance level (closure_evidence.h).
+  std::vector<LocationId> continuingEvidence(std::int64_t frame_id) const;
+  // A frame's own evidence for the run: its NFA, or at most geometry_max_nfa when it passed.
+  double frameEvidence(const GeometricResult& g) const;
   // The relaxed rule (temporal_*) for a candidate near the last accepted closure.
   bool passesNearLastClosure(const GeometricResult& g) const;
   const CachedKeypoints& keypointsOf(std::int64_t location_id);   // from the cache or the file

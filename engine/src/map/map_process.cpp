@@ -221,6 +221,10 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
     pose = closurePose(verified.location, verified.geometry);
   times.verification = msSince(verify_start);
   r.hypothesis.candidates_checked = verified.checked;
+  counters_.closure_evidence = verified.evidence;
+  r.hypothesis.evidence_frames = verified.by_evidence   ? verified.evidence.frames
+                                 : verified.checked > 0 ? 1
+                                                        : 0;
   const std::int64_t hypothesis = verified.location;
   std::string reason;
   if (hypothesis != kNewPlace) {

@@ -3,11 +3,13 @@
 // one (its prediction smears mass along the path), so its WM neighbours compete with it.
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <optional>
 #include <set>
 
 #include "decision/candidate_choice.h"
+#include "decision/closure_evidence.h"
 #include "map/map_impl.h"
 #include "map/option_mapping.h"
 
@@ -80,6 +82,27 @@ bool MapImpl::passesNearLastClosure(const GeometricResult& g) const {
   return by_count || by_chance;
 }
 
+std::vector<LocationId> MapImpl::continuingEvidence(std::int64_t frame_id) const {
+  const ClosureEvidence& evidence = counters_.closure_evidence;
+  if (!geometricCheckOn(options_) || options_.geometry_rule == GeometryRule::kInliers ||
+      !continuesEvidence(evidence, frame_id, *session_id_))
+    return {};
+  std::vector<LocationId> reach;
+  const auto inWm = [this](LocationId id) { return tiers_->isIn(id, Tier::kWm); };
+  // Along the traversal, as a closure run: between two frames the matching place moves a link
+  // or two either way.
+  for (const auto& [id, depth] : graph_.withinLinks(evidence.location, options_.temporal_radius,
+                                                    inWm, LinkWalk::kNeighbourLinksOnly))
+    reach.push_back(id);
+  std::sort(reach.begin(), reach.end());
+  return reach;
+}
+
+double MapImpl::frameEvidence(const GeometricResult& g) const {
+  const double own = std::min(g.log10_nfa, kNoModel);
+  return g.passed ? std::min(own, std::log10(options_.geometry_max_nfa)) : own;
+}
+
 std::vector<LocationId> MapImpl::nearLastClosure(std::int64_t frame_id) const {
   // Without the geometric check there is no chance level to relax.
   const bool relaxed =
@@ -141,6 +164,8 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   // closure was.
   sources.near_last_closure = nearLastClosure(frame_id);
   const std::vector<LocationId>& near = sources.near_last_closure;
+  sources.continuing_evidence = continuingEvidence(frame_id);
+  const std::vector<LocationId>& continuing = sources.continuing_evidence;
   // Most likely first (candidate_choice.h says how the first pass ends the search).
   const std::vector<LocationId> candidates = orderCandidates(
       sources, [&similarities](LocationId c) { return similarityOf(similarities, c); });
@@ -170,25 +195,56 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   query.words = word_of_feature;
   query.codes = std::make_shared<const DescriptorCodes>(
       quantiseDescriptors(features.descriptors, kQueryCodeLevels));
+  std::map<LocationId, GeometricResult> checked_continuing;
   const CandidateChoice choice = chooseCandidate(
       candidates, near, geometry.rule,
       [&](LocationId c) -> std::optional<GeometricResult> {
         const CachedKeypoints& keypoints = keypointsOf(c);
         if (keypoints.points.empty()) return std::nullopt;
-        return checkGeometry(query, viewOf(keypoints), geometry);
+        GeometricResult g = checkGeometry(query, viewOf(keypoints), geometry);
+        if (std::binary_search(continuing.begin(), continuing.end(), c)) checked_continuing[c] = g;
+        return g;
       },
       [this](const GeometricResult& g) { return passesNearLastClosure(g); });
   v.checked = choice.checked;
-  if (choice.result) {
-    v.location = choice.location;
-    v.geometry = *choice.result;
-    v.passed = choice.passed;
-    v.temporal = choice.temporal;
-    v.continues_run = std::binary_search(near.begin(), near.end(), choice.location);
-    v.inliers = choice.result->inliers;
-    v.matches = choice.result->matches;
-    v.log10_nfa = std::min(choice.result->log10_nfa, kNoModel);
+  if (!choice.result) return v;
+  LocationId reported = choice.location;
+  const GeometricResult* result = &*choice.result;
+  v.passed = choice.passed;
+  v.temporal = choice.temporal;
+  const ClosureEvidence& before = counters_.closure_evidence;
+  const auto alternativesOf = [&continuing](LocationId c) {
+    return std::binary_search(continuing.begin(), continuing.end(), c)
+               ? static_cast<int>(continuing.size())
+               : 0;
+  };
+  v.evidence = addEvidence(before, reported, frame_id, *session_id_, frameEvidence(*result),
+                           alternativesOf(reported));
+  if (!choice.passed) {
+    // No frame passes alone: the strongest run through a place that continues the last one.
+    for (const auto& [c, g] : checked_continuing) {
+      const ClosureEvidence run = addEvidence(before, c, frame_id, *session_id_, frameEvidence(g),
+                                              static_cast<int>(continuing.size()));
+      if (run.log10_nfa < v.evidence.log10_nfa) {
+        v.evidence = run;
+        reported = c;
+        result = &g;
+      }
+    }
+    if (v.evidence.frames > 1 && v.evidence.log10_nfa <= std::log10(options_.geometry_max_nfa)) {
+      v.passed = true;
+      v.by_evidence = true;
+    } else {
+      reported = choice.location;  // the frame's own best, as before
+      result = &*choice.result;
+    }
   }
+  v.location = reported;
+  v.geometry = *result;
+  v.continues_run = std::binary_search(near.begin(), near.end(), reported);
+  v.inliers = result->inliers;
+  v.matches = result->matches;
+  v.log10_nfa = std::min(result->log10_nfa, kNoModel);
   return v;
 }
 
