@@ -13,8 +13,8 @@ std::vector<LocationId> orderCandidates(const CandidateSources& sources,
   ordered.push_back(sources.hypothesis);
   std::set<LocationId> seen{sources.hypothesis};
   std::vector<std::pair<double, LocationId>> others;
-  for (const auto* list : {&sources.around, &sources.most_similar, &sources.searched_back,
-                           &sources.near_last_closure, &sources.continuing_evidence})
+  for (const auto* list :
+       {&sources.around, &sources.most_similar, &sources.searched_back, &sources.near_last_closure})
     for (LocationId c : *list)
       if (seen.insert(c).second) others.emplace_back(-similarity(c), c);
   std::sort(others.begin(), others.end());

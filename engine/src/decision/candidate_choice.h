@@ -26,12 +26,11 @@
 namespace placedb {
 
 struct CandidateSources {
-  LocationId hypothesis = kNewPlace;            // the filter's best
-  std::vector<LocationId> around;               // WM locations near it, nearest first
-  std::vector<LocationId> most_similar;         // WM locations by eq. 5, best first
-  std::vector<LocationId> searched_back;        // brought back from LTM by the place codes
-  std::vector<LocationId> near_last_closure;    // sorted
-  std::vector<LocationId> continuing_evidence;  // within reach of the last frame's match
+  LocationId hypothesis = kNewPlace;          // the filter's best
+  std::vector<LocationId> around;             // WM locations near it, nearest first
+  std::vector<LocationId> most_similar;       // WM locations by eq. 5, best first
+  std::vector<LocationId> searched_back;      // brought back from LTM by the place codes
+  std::vector<LocationId> near_last_closure;  // sorted
 };
 
 // Every source's locations once, most likely first: the hypothesis, then the others by

@@ -164,8 +164,9 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   // closure was.
   sources.near_last_closure = nearLastClosure(frame_id);
   const std::vector<LocationId>& near = sources.near_last_closure;
-  sources.continuing_evidence = continuingEvidence(frame_id);
-  const std::vector<LocationId>& continuing = sources.continuing_evidence;
+  // The places that continue the last frame's evidence count when the frame checks them anyway:
+  // checking them for their own sake would give every frame more chances to pass by chance.
+  const std::vector<LocationId> continuing = continuingEvidence(frame_id);
   // Most likely first (candidate_choice.h says how the first pass ends the search).
   const std::vector<LocationId> candidates = orderCandidates(
       sources, [&similarities](LocationId c) { return similarityOf(similarities, c); });
