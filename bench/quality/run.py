@@ -3,7 +3,7 @@
 reference scorer at windows 0 and 10, and prints one Markdown table.
 
 Usage: bench/quality/run.py [--build DIR] [--datasets DIR] [--scorer PATH] [--out DIR]
-                            [--rules greedy,nndr] [--sequences lip6,lip6_half,samples,lip6_160]
+                            [--rules greedy,nndr] [--sequences lip6,lip6_half,samples,lip6_160,lip6_120]
                             [--set key=value]...
 Settings given with --set apply to every run (defaults otherwise: no per-sequence tuning).
 """
@@ -21,6 +21,7 @@ SEQUENCES = {  # name: (folder, frame list, ground truth)
     'lip6_half': ('lip6_outdoor', 'frames_half.txt', 'gt_pairs_half.txt'),
     'samples': ('rtabmap_samples', 'frames.txt', 'gt_pairs.txt'),
     'lip6_160': ('lip6_outdoor_160x128', 'frames.txt', 'gt_pairs.txt'),
+    'lip6_120': ('lip6_outdoor_120x96', 'frames.txt', 'gt_pairs.txt'),
 }
 
 
@@ -50,7 +51,7 @@ def main():
     p.add_argument('--scorer', default=None)
     p.add_argument('--out', default='/tmp/placedb-quality')
     p.add_argument('--rules', default='greedy,nndr')
-    p.add_argument('--sequences', default='lip6,lip6_half,samples,lip6_160')
+    p.add_argument('--sequences', default='lip6,lip6_half,samples,lip6_160,lip6_120')
     p.add_argument('--set', action='append', default=[], dest='settings')
     a = p.parse_args()
     scorer = a.scorer or os.path.join(os.path.dirname(a.datasets), 'tools', 'score_loops.py')
