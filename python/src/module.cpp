@@ -303,6 +303,7 @@ PYBIND11_MODULE(placedb, m) {
   using namespace placedb::python;
   m.doc() = "placedb: appearance-based loop-closure detection with a SQLite map";
   m.attr("__version__") = PLACEDB_VERSION_STRING;
+  m.attr("__license__") = PLACEDB_LICENSE;
   registerErrors(m);
   bindResults(m);
   bindMap(m);

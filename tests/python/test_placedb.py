@@ -21,6 +21,13 @@ def scene(seed):
     return np.clip(image, 0, 255).astype(np.uint8)
 
 
+def test_module_names_its_version_and_license():
+    assert placedb.__version__.count(".") == 2
+    assert placedb.__license__ == "BSD-3-Clause"
+    root = pathlib.Path(__file__).resolve().parents[2]
+    assert "BSD 3-Clause License" in (root / "LICENSE").read_text()
+
+
 def test_maps_grey_and_bgr_images_and_reports_each_frame(tmp_path):
     path = str(tmp_path / "run.placedb")
     with placedb.Map(path) as m:

@@ -33,7 +33,8 @@ int run(int argc, char** argv) {
   app.name("placedb");
   app.footer(placedb::cli::exitCodeTable());
   app.require_subcommand(1);
-  app.set_version_flag("--version", std::string(PLACEDB_VERSION_STRING));
+  app.set_version_flag("--version", std::string(PLACEDB_VERSION_STRING) +
+                                        " (license " PLACEDB_LICENSE ", see LICENSE)");
   // The help to point at is that of the deepest subcommand named on the command line, also when
   // the error (a missing argument) is reported by the top-level app.
   app.failure_message([](const CLI::App* failed, const CLI::Error& e) {
