@@ -90,6 +90,26 @@ TEST(CliRefusals, VocabExportRefusesTheMapUnderAnyNameAndLeavesNoPartialFile) {
     EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
 }
 
+TEST(CliRefusals, GraphExportRefusesTheMapUnderAnyName) {
+  auto seq = smallSequence(8);
+  auto dir = scratchDir("CliRefusals_graph_export");
+  auto map = (dir / "m.placedb").string();
+  ASSERT_EQ(placedb({"map", map, (seq / "frames.txt").string(), "-q"}, dir).exit_code, 0);
+  fs::create_directories(dir / "sub");
+  fs::create_symlink(map, dir / "link.placedb");
+  const std::string before = bytesOf(map);
+  for (const auto& output : std::vector<std::string>{map, (dir / "." / "m.placedb").string(),
+                                                     (dir / "sub" / ".." / "m.placedb").string(),
+                                                     (dir / "link.placedb").string()}) {
+    for (const std::string format : {"g2o", "graphml"}) {
+      expectCleanError(placedb({"export", map, output, "--format", format}, dir), 2, "is the map");
+      EXPECT_TRUE(bytesOf(map) == before) << output << " as " << format;
+    }
+  }
+  ASSERT_EQ(placedb({"export", map, (dir / "g.g2o").string(), "--format", "g2o"}, dir).exit_code,
+            0);
+}
+
 TEST(CliRefusals, ResumeTakesTheSessionsStoredExtractor) {
   auto seq = smallSequence(10);
   auto dir = scratchDir("CliRefusals_resume_extractor");

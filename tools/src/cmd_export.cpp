@@ -5,6 +5,7 @@
 
 #include "commands.h"
 #include "graph_export.h"
+#include "output_guard.h"
 
 namespace placedb::cli {
 
@@ -34,6 +35,7 @@ Command addExportCommand(CLI::App& parent) {
       ->required()
       ->check(CLI::IsMember({"g2o", "graphml", "csv"}));
   return {app, [request]() {
+            refuseMapAsOutput("export", request->map_path, request->out);
             const MapGraph graph = readMapGraph(request->map_path);
             writeMapGraph(graph, request->format, request->out);
             std::size_t closures = 0;

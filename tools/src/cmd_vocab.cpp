@@ -9,6 +9,7 @@
 #include <filesystem>
 
 #include "commands.h"
+#include "output_guard.h"
 #include "placedb/error.h"
 #include "placedb/map.h"
 #include "placedb/storage/map_files.h"
@@ -71,26 +72,8 @@ vocab::VocabularyData wordsOfMap(const std::string& map_path) {
   return data;
 }
 
-// The export must not replace the map it reads, nor one of its side files, under any name.
-void refuseMapAsOutput(const std::string& map_path, const std::string& file) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  const fs::path output = fs::weakly_canonical(file, ec);
-  for (const auto& part : storage::mapFiles(map_path)) {
-    std::error_code part_ec;
-    const bool same = fs::exists(part, part_ec) && fs::exists(file, part_ec)
-                          ? fs::equivalent(part, file, part_ec)
-                          : fs::weakly_canonical(part, part_ec) == output;
-    if (same && !part_ec)
-      throw Error(ErrorCode::kInvalidArgument,
-                  fmt::format("vocab export: output {} is the map {} (or one of its files): give "
-                              "another file",
-                              file, part));
-  }
-}
-
 int runExport(const VocabRequest& request) {
-  refuseMapAsOutput(request.map_path, request.file);
+  refuseMapAsOutput("vocab export", request.map_path, request.file);
   vocab::VocabularyData data = wordsOfMap(request.map_path);
   // A temporary file beside the output, renamed over it once complete: a failed export leaves
   // neither a partial file nor a damaged older one.
