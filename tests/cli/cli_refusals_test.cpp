@@ -110,6 +110,21 @@ TEST(CliRefusals, GraphExportRefusesTheMapUnderAnyName) {
             0);
 }
 
+TEST(CliRefusals, ExportTakesItsFormatFromTheExtensionOrAsks) {
+  auto seq = smallSequence(8);
+  auto dir = scratchDir("CliRefusals_export_format");
+  auto map = (dir / "m.placedb").string();
+  ASSERT_EQ(placedb({"map", map, (seq / "frames.txt").string(), "-q"}, dir).exit_code, 0);
+  auto g2o = placedb({"export", map, (dir / "g.g2o").string()}, dir);
+  ASSERT_EQ(g2o.exit_code, 0) << describe(g2o);
+  EXPECT_NE(bytesOf((dir / "g.g2o").string()).find("VERTEX_SE3:QUAT"), std::string::npos);
+  auto graphml = placedb({"export", map, (dir / "g.GraphML").string()}, dir);
+  ASSERT_EQ(graphml.exit_code, 0) << describe(graphml);
+  EXPECT_NE(bytesOf((dir / "g.GraphML").string()).find("<graphml"), std::string::npos);
+  expectCleanError(placedb({"export", map, (dir / "g.txt").string()}, dir), 2, "--format");
+  EXPECT_FALSE(fs::exists(dir / "g.txt"));
+}
+
 TEST(CliRefusals, ResumeTakesTheSessionsStoredExtractor) {
   auto seq = smallSequence(10);
   auto dir = scratchDir("CliRefusals_resume_extractor");

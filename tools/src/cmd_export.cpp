@@ -1,13 +1,33 @@
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 #include "commands.h"
 #include "graph_export.h"
 #include "output_guard.h"
+#include "placedb/error.h"
 
 namespace placedb::cli {
+namespace {
+
+// The format an output's extension names (any case); a folder or another extension has to say.
+std::string formatOfExtension(const std::string& out) {
+  std::string ext = std::filesystem::path(out).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".g2o") return "g2o";
+  if (ext == ".graphml") return "graphml";
+  throw Error(ErrorCode::kInvalidArgument,
+              fmt::format("export: cannot tell the format of {} from its name: give --format g2o, "
+                          "graphml or csv",
+                          out));
+}
+
+}  // namespace
 
 Command addExportCommand(CLI::App& parent) {
   struct Request {
@@ -27,14 +47,16 @@ Command addExportCommand(CLI::App& parent) {
       "           poses), EDGE_SE3:QUAT per odometry link and loop closure; an appearance-only\n"
       "           closure is the identity, after a `# placedb appearance-only A B` comment\n\n"
       "Examples:\n"
+      "  placedb export run.placedb graph.g2o              (the format from the extension)\n"
       "  placedb export run.placedb graph.graphml --format graphml\n"
       "  placedb export run.placedb graph/ --format csv");
   app->add_option("MAP", request->map_path, "map file")->required();
   app->add_option("OUT", request->out, "file to write (a folder for csv)")->required();
-  app->add_option("--format", request->format, "g2o, graphml or csv")
-      ->required()
+  app->add_option("--format", request->format,
+                  "g2o, graphml or csv; by default the extension of OUT (.g2o, .graphml)")
       ->check(CLI::IsMember({"g2o", "graphml", "csv"}));
   return {app, [request]() {
+            if (request->format.empty()) request->format = formatOfExtension(request->out);
             refuseMapAsOutput("export", request->map_path, request->out);
             const MapGraph graph = readMapGraph(request->map_path);
             writeMapGraph(graph, request->format, request->out);
