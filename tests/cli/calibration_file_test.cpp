@@ -48,6 +48,41 @@ TEST(CalibrationFile, OpenCvYamlCameraMatrix) {
   expectRefused("%YAML:1.0\n---\nimage_width: 512\n", "no 3x3 camera_matrix");
 }
 
+// As ROS's camera_calibration writes it (ost.yaml): plain YAML, matrices as {rows, cols, data}.
+const char* kRosCalibration =
+    "image_width: 512\n"
+    "image_height: 384\n"
+    "camera_name: narrow_stereo\n"
+    "camera_matrix:\n"
+    "  rows: 3\n"
+    "  cols: 3\n"
+    "  data: [420.5, 0, 256, 0, 421, 192.25, 0, 0, 1]\n"
+    "distortion_model: plumb_bob\n"
+    "distortion_coefficients:\n"
+    "  rows: 1\n"
+    "  cols: 5\n"
+    "  data: [-0.1, 0.01, 0, 0, 0]\n"
+    "rectification_matrix:\n"
+    "  rows: 3\n"
+    "  cols: 3\n"
+    "  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n"
+    "projection_matrix:\n"
+    "  rows: 3\n"
+    "  cols: 4\n"
+    "  data: [410, 0, 256, 0, 0, 411, 192, 0, 0, 0, 1, 0]\n";
+
+TEST(CalibrationFile, RosCameraCalibrationYaml) {
+  const auto s = parseCalibration(kRosCalibration, "ost.yaml");
+  EXPECT_EQ(s.at("fx"), "420.5");
+  EXPECT_EQ(s.at("fy"), "421");
+  EXPECT_EQ(s.at("cx"), "256");
+  EXPECT_EQ(s.at("cy"), "192.25");
+  expectRefused("camera_matrix:\n  rows: 3\n  cols: 3\n  data: [420.5, 0, 256, 0, 421]\n",
+                "no 3x3 camera_matrix");
+  expectRefused("camera_matrix:\n  rows: 2\n  cols: 2\n  data: [1, 0, 0, 1]\n",
+                "no 3x3 camera_matrix");
+}
+
 TEST(CalibrationFile, FileBetweenConfigAndSet) {
   const auto dir = placedb::testing::scratchDir("CalibrationFile");
   std::ofstream(dir / "cam.txt") << "190 190 120 96\n";

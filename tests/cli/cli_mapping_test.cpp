@@ -64,6 +64,37 @@ void expectSameScoredRows(const CsvTable& a, const CsvTable& b) {
   }
 }
 
+// A calibration as ROS's camera_calibration writes it gives the closures a relative pose.
+TEST(CliRealSequence, RosCalibrationYamlGivesClosuresAPose) {
+  fs::path data = dataset("rtabmap_samples");
+  if (data.empty()) GTEST_SKIP() << "rtabmap_samples absent under " << datasetsDir();
+  auto dir = scratchDir("CliReal_ros_calibration");
+  std::ofstream(dir / "ost.yaml") << "image_width: 512\nimage_height: 384\n"
+                                     "camera_name: camera\ncamera_matrix:\n  rows: 3\n"
+                                     "  cols: 3\n  data: [420, 0, 256, 0, 420, 192, 0, 0, 1]\n"
+                                     "distortion_model: plumb_bob\ndistortion_coefficients:\n"
+                                     "  rows: 1\n  cols: 5\n  data: [0, 0, 0, 0, 0]\n";
+  auto map = dir / "run.placedb";
+  auto mapped = placedb({"map", map.string(), (data / "frames.txt").string(), "--calibration",
+                         (dir / "ost.yaml").string(), "-q"},
+                        dir);
+  ASSERT_EQ(mapped.exit_code, 0) << describe(mapped);
+  ASSERT_EQ(placedb({"export", map.string(), (dir / "g.g2o").string()}, dir).exit_code, 0);
+  std::ifstream g2o(dir / "g.g2o");
+  int appearance_only = 0, edges = 0;
+  for (std::string line; std::getline(g2o, line);) {
+    appearance_only += line.rfind("# placedb appearance-only", 0) == 0;
+    edges += line.rfind("EDGE_SE3:QUAT", 0) == 0;
+  }
+  auto info = placedb({"info", map.string(), "--json"}, dir);
+  ASSERT_EQ(info.exit_code, 0) << describe(info);
+  const auto j = nlohmann::json::parse(info.out);
+  const int closures = j.at("loop_closures").get<int>();
+  ASSERT_GT(closures, 30);
+  EXPECT_LT(appearance_only, closures / 2) << "most closures carry a pose";
+  EXPECT_GT(edges, closures);
+}
+
 TEST(CliRealSequence, MapEvalInfoQueryOnRtabmapSamples) {
   fs::path data = dataset("rtabmap_samples");
   if (data.empty()) GTEST_SKIP() << "rtabmap_samples absent under " << datasetsDir();

@@ -17,8 +17,9 @@ namespace {
 
 [[noreturn]] void refuse(const std::string& name, const std::string& why) {
   throw Error(ErrorCode::kInvalidArgument,
-              fmt::format("calibration file {}: {} (expected one line `fx fy cx cy` or an OpenCV "
-                          "YAML/XML/JSON file with a 3x3 camera_matrix)",
+              fmt::format("calibration file {}: {} (expected one line `fx fy cx cy`, an OpenCV "
+                          "YAML/XML/JSON file with a 3x3 camera_matrix, or ROS "
+                          "camera_calibration's YAML)",
                           name, why));
 }
 
@@ -34,13 +35,40 @@ std::map<std::string, std::string> settingsOf(const std::array<double, 4>& value
   return out;
 }
 
+// ROS's camera_calibration writes a matrix as a plain map {rows, cols, data: [row-major]}.
+cv::Mat rosMatrix(const cv::FileNode& node) {
+  const cv::FileNode data = node["data"];
+  if (!node.isMap() || !data.isSeq() || static_cast<int>(node["rows"]) <= 0 ||
+      static_cast<int>(node["cols"]) <= 0)
+    return cv::Mat();
+  const int rows = static_cast<int>(node["rows"]), cols = static_cast<int>(node["cols"]);
+  if (data.size() != static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols))
+    return cv::Mat();
+  cv::Mat m(rows, cols, CV_64F);
+  int i = 0;
+  for (const cv::FileNode& value : data) {
+    m.at<double>(i / cols, i % cols) = value.real();
+    ++i;
+  }
+  return m;
+}
+
 std::map<std::string, std::string> parseOpenCv(const std::string& content,
                                                const std::string& name) {
   cv::Mat k;
   try {
-    cv::FileStorage fs(content, cv::FileStorage::READ | cv::FileStorage::MEMORY);
+    // OpenCV reads YAML only after its own header line; ROS's files have none.
+    const bool yaml_without_header = trim(content).rfind("%YAML", 0) != 0 &&
+                                     trim(content).rfind("<?xml", 0) != 0 &&
+                                     trim(content).rfind("{", 0) != 0;
+    cv::FileStorage fs(yaml_without_header ? "%YAML:1.0\n---\n" + content : content,
+                       cv::FileStorage::READ | cv::FileStorage::MEMORY);
     if (!fs.isOpened()) refuse(name, "not a readable OpenCV file");
-    fs["camera_matrix"] >> k;
+    const cv::FileNode node = fs["camera_matrix"];
+    if (node.isMap() && node["data"].isSeq() && !node["dt"].isString())
+      k = rosMatrix(node);
+    else
+      node >> k;
   } catch (const cv::Exception& e) {
     refuse(name, fmt::format("not a readable OpenCV file ({})", e.msg));
   }

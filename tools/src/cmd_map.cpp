@@ -21,9 +21,9 @@ void addSettingsOptions(CLI::App& app, SettingsInput& settings) {
   app.add_option("--preset", settings.preset,
                  "start from a preset: `paper` (paper 000, table 4) or `default`");
   app.add_option("--calibration", settings.calibration_file,
-                 "camera intrinsics (settings fx fy cx cy): a line `fx fy cx cy` or an OpenCV "
-                 "YAML/XML/JSON file with camera_matrix; accepted loop closures then store their "
-                 "relative pose");
+                 "camera intrinsics (settings fx fy cx cy): a line `fx fy cx cy`, an OpenCV "
+                 "YAML/XML/JSON file with camera_matrix, or ROS camera_calibration's YAML; "
+                 "accepted loop closures then store their relative pose");
 }
 
 Command addMapCommand(CLI::App& parent) {
