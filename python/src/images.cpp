@@ -1,7 +1,10 @@
 #include "images.h"
 
+#include <cstring>
 #include <string>
+#include <vector>
 
+#include "image_source.h"
 #include "placedb/error.h"
 
 namespace py = pybind11;
@@ -37,6 +40,29 @@ cv::Mat imageOf(const py::array& image, py::array& contiguous) {
   if (!contiguous) throw py::error_already_set();
   return cv::Mat(static_cast<int>(image.shape(0)), static_cast<int>(image.shape(1)),
                  CV_MAKETYPE(depth, channels), const_cast<void*>(contiguous.data()));
+}
+
+cv::Mat readImage(const std::string& path) {
+  std::string problem;
+  cv::Mat image;
+  {
+    py::gil_scoped_release unlocked;
+    image = cli::readImageFile(path, problem);
+  }
+  if (image.empty()) throw Error(ErrorCode::kIo, "cannot read image " + path + ": " + problem);
+  return image;
+}
+
+py::array arrayOf(const cv::Mat& image) {
+  if (image.depth() != CV_8U) throw Error(ErrorCode::kInternal, "image: not 8-bit");
+  std::vector<py::ssize_t> shape{image.rows, image.cols};
+  if (image.channels() > 1) shape.push_back(image.channels());
+  py::array_t<std::uint8_t> out(shape);
+  const std::size_t row_bytes = static_cast<std::size_t>(image.cols) * image.elemSize();
+  for (int r = 0; r < image.rows; ++r)
+    std::memcpy(out.mutable_data() + static_cast<std::size_t>(r) * row_bytes, image.ptr(r),
+                row_bytes);
+  return out;
 }
 
 }  // namespace placedb::python

@@ -104,6 +104,13 @@ class PyMap {
     return result;
   }
 
+  QueryResult queryFile(const std::string& path, std::size_t top) {
+    const cv::Mat image = readImage(path);
+    Map& target = map();
+    py::gil_scoped_release unlocked;
+    return target.query(image, top);
+  }
+
   QueryResult query(const py::array& image, std::size_t top) {
     py::array contiguous;
     cv::Mat mat = imageOf(image, contiguous);
@@ -272,7 +279,11 @@ void bindMap(py::module_& m) {
            py::arg("source_index") = py::none(),
            "Maps one image file; an unreadable file is recorded as a bad frame")
       .def("query", &PyMap::query, py::arg("image"), py::arg("top") = 5,
-           "The stored locations (STM and WM) that most resemble the image; changes nothing")
+           "The stored locations that most resemble a numpy image, searched in every tier (STM, "
+           "WM and LTM); changes nothing")
+      .def("query_file", &PyMap::queryFile, py::arg("path"), py::arg("top") = 5,
+           "query() on an image file, read as `placedb map` reads it; an unreadable file "
+           "raises IoError")
       .def(
           "import_vocabulary",
           [](PyMap& self, const std::string& file, const std::string& mode,
@@ -322,6 +333,11 @@ PYBIND11_MODULE(placedb, m) {
       },
       py::arg("source"),
       "The images of a folder (natural order) or a list file, as `placedb map` reads them");
+  m.def(
+      "read_image", [](const std::string& path) { return arrayOf(readImage(path)); },
+      py::arg("path"),
+      "An image file as `placedb map` reads it: a H x W x 3 uint8 BGR numpy array (IoError "
+      "when it cannot be read)");
   m.def("loop_closures", &loopClosureRows, py::arg("path"),
         "The rows of the map's v_loop_closures view, as dicts (read-only)");
   m.def("settings", []() {

@@ -28,6 +28,39 @@ def test_module_names_its_version_and_license():
     assert "BSD 3-Clause License" in (root / "LICENSE").read_text()
 
 
+def test_reads_and_queries_image_files(tmp_path):
+    import zlib, struct
+
+    def png(path, image):  # a grey 8-bit PNG, without OpenCV or PIL
+        raw = b"".join(b"\0" + row.tobytes() for row in image)
+        def chunk(kind, data):
+            return (struct.pack(">I", len(data)) + kind + data +
+                    struct.pack(">I", zlib.crc32(kind + data) & 0xffffffff))
+        header = struct.pack(">IIBBBBB", image.shape[1], image.shape[0], 8, 0, 0, 0, 0)
+        path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) +
+                         chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+    for i in range(3):
+        png(tmp_path / f"{i}.png", scene(i))
+    image = placedb.read_image(str(tmp_path / "1.png"))
+    assert image.shape == (240, 320, 3) and image.dtype == np.uint8
+    assert (image[:, :, 0] == scene(1)).all()
+    path = str(tmp_path / "run.placedb")
+    with placedb.Map(path) as m:
+        m.begin_session(str(tmp_path))
+        for i in range(3):
+            m.process_file(str(tmp_path / f"{i}.png"))
+    with placedb.Map(path, read_only=True) as m:
+        result = m.query_file(str(tmp_path / "1.png"))
+        assert result.matches
+        assert any(f.source_index == 1 for f in result.matches[0].frames)
+        with pytest.raises(placedb.IoError) as missing:
+            m.query_file(str(tmp_path / "absent.png"))
+        assert "absent.png" in str(missing.value)
+    with pytest.raises(placedb.IoError):
+        placedb.read_image(str(tmp_path / "absent.png"))
+
+
 def test_maps_grey_and_bgr_images_and_reports_each_frame(tmp_path):
     path = str(tmp_path / "run.placedb")
     with placedb.Map(path) as m:

@@ -148,8 +148,7 @@ class Map {
   virtual FrameResult recordUnreadable(std::int64_t source_index,
                                        const std::string& source_path) = 0;
 
-  // Localisation against the locations in short-term and working memory (LTM locations are not
-  // searched yet); changes nothing.
+  // Localisation against the locations of every tier (STM, WM and LTM); changes nothing.
   virtual QueryResult query(const cv::Mat& image, std::size_t top_k = 5) = 0;
 
   // Starts the vocabulary of a new map (no frames, no words) from a vocabulary file: placedb's
