@@ -10,6 +10,7 @@
 #include "eval.h"
 #include "frame_log.h"
 #include "loop_matrix.h"
+#include "placedb/error.h"
 #include "run_series.h"
 #include "subprocess.h"
 #include "test_paths.h"
@@ -150,6 +151,20 @@ TEST(PrecisionRecall, CurveOverThresholds) {
   EXPECT_DOUBLE_EQ(eval.pr_curve[2].precision, 0.5);
   EXPECT_DOUBLE_EQ(eval.pr_curve[2].recall, 2.0 / 3);
   EXPECT_DOUBLE_EQ(eval.figures.wrong_bar, 0.8);
+}
+
+// A log with a frame twice is refused, naming the frame: it would score a loop twice.
+TEST(EvalRefusals, AFrameTwiceIsRefused) {
+  CsvTable log;
+  log.header = {"frame", "candidate_frames", "score", "accepted", "time_ms"};
+  log.rows = {{"0", "", "0", "0", "10"}, {"1", "0", "0.9", "1", "10"}, {"1", "0", "0.9", "1", "9"}};
+  try {
+    evaluate(log, {{1, {0}}}, 0);
+    ADD_FAILURE() << "a log with frame 1 twice was scored";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("frame 1 appears twice"), std::string::npos) << e.what();
+  }
 }
 
 // A bad frame's figures are gaps (NaN) in the plotted series, not zeros; its time stays.
