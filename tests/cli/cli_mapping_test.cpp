@@ -291,6 +291,37 @@ TEST(CliSyntheticSequence, SplitRunEqualsStraightRun) {
   EXPECT_EQ(info(b, dir)["sessions"].size(), 2u);
 }
 
+// The map loses its last commits (a power cut with synchronous=NORMAL loses the -wal): the log
+// still holds their rows. The resume cuts the log back to the map's last durable frame, so every
+// frame is in it once and scores as in a straight run.
+TEST(CliSyntheticSequence, ResumeAfterLostCommitsCutsTheLogBack) {
+  auto seq = demoSequence();
+  auto dir = scratchDir("CliSynthetic_lost_commits");
+  auto source = (seq / "frames.txt").string();
+  auto straight = placedb(
+      {"map", (dir / "a.placedb").string(), source, "--log", (dir / "a.csv").string()}, dir);
+  ASSERT_EQ(straight.exit_code, 0) << describe(straight);
+
+  auto b = dir / "b.placedb";
+  const std::string b_log = (dir / "b.csv").string();
+  ASSERT_EQ(placedb({"map", b.string(), source, "--log", b_log, "--stop-after", "20", "-q"}, dir)
+                .exit_code,
+            0);
+  fs::copy_file(b, dir / "durable.placedb");  // the map as the last durable commit left it
+  ASSERT_EQ(placedb({"map", b.string(), source, "--log", b_log, "--stop-after", "12", "-q"}, dir)
+                .exit_code,
+            0);
+  ASSERT_EQ(frameColumn(readCsv(b_log)), range(0, 31));
+  fs::copy_file(dir / "durable.placedb", b, fs::copy_options::overwrite_existing);
+
+  auto resumed = placedb({"map", b.string(), source, "--log", b_log}, dir);
+  ASSERT_EQ(resumed.exit_code, 0) << describe(resumed);
+  EXPECT_NE(resumed.err.find("frames 20-31"), std::string::npos) << resumed.err;
+  const CsvTable log = readCsv(b_log);
+  EXPECT_EQ(frameColumn(log), range(0, 59));
+  expectSameScoredRows(readCsv(dir / "a.csv"), log);
+}
+
 TEST(CliSyntheticSequence, VocabularyExport) {
   auto seq = demoSequence();
   auto dir = scratchDir("CliSynthetic_vocab");

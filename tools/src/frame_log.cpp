@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -146,6 +147,49 @@ void FrameLogWriter::checkAppendable(const std::filesystem::path& path,
                             name, last,
                             resumed_session ? fmt::format("resumes session {}", *resumed_session)
                                             : std::string("starts a new session")));
+}
+
+std::vector<std::int64_t> FrameLogWriter::cutBack(const std::filesystem::path& path,
+                                                  std::int64_t session, std::int64_t first_index) {
+  std::vector<std::int64_t> dropped;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return dropped;  // no log yet
+  const std::string name = path.string();
+  const std::vector<std::string>& names = columns();
+  const auto at = [&names](const char* column) {
+    return static_cast<std::size_t>(std::find(names.begin(), names.end(), column) - names.begin());
+  };
+  const std::size_t frame_at = at("frame"), session_at = at("session");
+  off_t keep = 0, offset = 0;
+  bool header = true;
+  for (std::string line; std::getline(in, line);) {
+    const off_t next = offset + static_cast<off_t>(line.size()) + (in.eof() ? 0 : 1);
+    if (header) {
+      header = false;
+      keep = next;
+    } else if (!line.empty()) {
+      const std::vector<std::string> fields = splitCsvLine(line);
+      std::int64_t frame = -1;
+      const bool ours =
+          fields.size() == names.size() && fields[session_at] == std::to_string(session);
+      if (ours) frame = std::stoll(fields[frame_at]);
+      if (ours && frame >= first_index) {
+        dropped.push_back(frame);
+      } else if (dropped.empty()) {
+        keep = next;
+      } else {
+        throw Error(ErrorCode::kInvalidArgument,
+                    fmt::format("log {}: a row after frame {} is not of session {}: give a new "
+                                "file",
+                                name, dropped.back(), session));
+      }
+    }
+    offset = next;
+  }
+  in.close();
+  if (!dropped.empty() && ::truncate(name.c_str(), keep) != 0)
+    throwWriteError("cannot cut back log " + name, errno);
+  return dropped;
 }
 
 FrameLogWriter::FrameLogWriter(const std::filesystem::path& path) : path_(path.string()) {

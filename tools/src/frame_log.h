@@ -36,6 +36,11 @@ class FrameLogWriter {
   // one log never mixes two runs. Throws placedb::Error: kIo (cannot write), kInvalidArgument.
   static void checkAppendable(const std::filesystem::path& path,
                               std::optional<std::int64_t> resumed_session);
+  // Rows of `session` from frame `first_index` on, which a resume maps again: the map lost their
+  // commits (a power cut can take the write-ahead log with it) after the log had them. They are
+  // cut off so that each frame is in the log once. Returns the frames dropped, in order.
+  static std::vector<std::int64_t> cutBack(const std::filesystem::path& path, std::int64_t session,
+                                           std::int64_t first_index);
   ~FrameLogWriter();
   FrameLogWriter(const FrameLogWriter&) = delete;
   FrameLogWriter& operator=(const FrameLogWriter&) = delete;

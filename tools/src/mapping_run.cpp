@@ -137,7 +137,18 @@ MappingSummary runMapping(const MappingRequest& request) {
   } else {
     summary.session_id = map->beginSession(source->canonicalPath(), source->digest()).id;
   }
-  if (!request.log_path.empty()) log = std::make_unique<FrameLogWriter>(request.log_path);
+  if (!request.log_path.empty()) {
+    if (resume) {
+      const std::vector<std::int64_t> dropped =
+          FrameLogWriter::cutBack(request.log_path, summary.session_id, summary.first_index);
+      if (!dropped.empty())
+        printWarning(
+            fmt::format("log {}: dropped the rows of frames {}-{}, which the map lost "
+                        "(they are mapped again)",
+                        request.log_path, dropped.front(), dropped.back()));
+    }
+    log = std::make_unique<FrameLogWriter>(request.log_path);
+  }
   if (!request.quiet)
     std::fputs(
         fmt::format("placedb: {} session {} of {} over {} {} from frame {}\n",
