@@ -130,6 +130,38 @@ TEST(CliFaults, DamagedPagesAreRefusedBeforeAnyWrite) {
   }
 }
 
+// Values SQLite cannot judge: the engine's own state, damaged in ways no page check sees. Each is
+// refused before any write (exit 4, naming the map and what is wrong), the map byte-identical.
+TEST(CliFaults, DamagedEngineValuesAreRefusedBeforeAnyWrite) {
+  auto seq = smallSequence(12);
+  auto dir = scratchDir("CliFaults_values");
+  auto good = mappedCopy(seq, dir, "good.placedb", {"--stop-after", "8"});
+  const std::vector<std::pair<std::string, std::string>> damage = {
+      {"UPDATE engine_state SET value = json_set(value, '$.next_location_id', -5) "
+       "WHERE key = 'engine.counters'",
+       "next_location_id"},
+      {"UPDATE engine_state SET value = json_set(value, '$.next_frame_id', 0) "
+       "WHERE key = 'engine.counters'",
+       "next_frame_id"},
+      {"UPDATE locations SET weight = -3 WHERE id = (SELECT min(id) FROM locations)", "weight"},
+      {"UPDATE filter_posterior SET probability = -1e999 "
+       "WHERE location_id = (SELECT min(location_id) FROM filter_posterior)",
+       "posterior"},
+  };
+  int n = 0;
+  for (const auto& [sql, names] : damage) {
+    auto map = dir / ("v" + std::to_string(n++) + ".placedb");
+    fs::copy_file(good, map, fs::copy_options::overwrite_existing);
+    sqlExec(map, sql);
+    const std::string before = bytesOf(map);
+    auto r = placedb({"map", map.string(), (seq / "frames.txt").string(), "-q"}, dir);
+    EXPECT_EQ(r.exit_code, 4) << names << ": " << describe(r);
+    EXPECT_NE(r.err.find(map.string()), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(names), std::string::npos) << r.err;
+    EXPECT_TRUE(bytesOf(map) == before) << names;
+  }
+}
+
 TEST(CliFaults, MissingTablesAreRefusedNotStorageFailures) {
   auto seq = smallSequence(6);
   auto dir = scratchDir("CliFaults_tables");

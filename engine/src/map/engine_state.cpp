@@ -1,6 +1,8 @@
 // Engine counters as readable JSON; the vocabulary index state as a header plus the kd_nodes rows.
 #include "map/engine_state.h"
 
+#include <cmath>
+
 #include <fmt/format.h>
 
 #include <nlohmann/json.hpp>
@@ -72,6 +74,23 @@ bool EngineCounters::load(const storage::MapStore& store) {
     throw Error(ErrorCode::kMapRefused, fmt::format("{}: engine state '{}' is damaged: {}",
                                                     store.path(), kCountersKey, e.what()));
   }
+  // Values no page check can judge: an id below 1 would hand out ids the schema reserves.
+  const auto require = [&](bool ok, const char* name, auto value, const char* expected) {
+    if (!ok)
+      throw Error(ErrorCode::kMapRefused,
+                  fmt::format("{}: engine state '{}' is damaged: {} = {} ({})", store.path(),
+                              kCountersKey, name, value, expected));
+  };
+  require(next_frame_id >= 1, "next_frame_id", next_frame_id, "at least 1");
+  require(next_location_id >= 1, "next_location_id", next_location_id, "at least 1");
+  require(next_wm_age >= 1, "next_wm_age", next_wm_age, "at least 1");
+  require(feature_sum >= 0, "feature_sum", feature_sum, "not negative");
+  require(feature_frames >= 0, "feature_frames", feature_frames, "not negative");
+  require(last_location >= 0 && last_location < next_location_id, "last_location", last_location,
+          "below next_location_id");
+  require(std::isfinite(previous_score), "previous_score", previous_score, "a finite number");
+  require(std::isfinite(closure_evidence.log10_nfa) && closure_evidence.frames >= 0,
+          "evidence_log10_nfa", closure_evidence.log10_nfa, "a finite number");
   return true;
 }
 

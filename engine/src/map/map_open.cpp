@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <set>
 
@@ -81,6 +82,10 @@ void MapImpl::restoreFromStore() {
   std::vector<std::int64_t> live;  // STM and WM
   for (Tier tier : {Tier::kStm, Tier::kWm, Tier::kLtm}) {
     for (const auto& row : store_->locationsInTier(tier)) {
+      if (row.weight < 0)
+        throw Error(ErrorCode::kMapRefused,
+                    fmt::format("{}: locations row {} is damaged: weight {} is negative",
+                                store_->path(), row.id, row.weight));
       const auto age = ages.find(row.id);
       snapshot.locations.push_back(
           {row.id, tier, row.weight, age == ages.end() ? row.id : age->second});
@@ -159,6 +164,12 @@ void MapImpl::restoreFromStore() {
 
   FilterState filter_state;
   filter_state.posterior = store_->loadPosterior();
+  for (const auto& [location, p] : filter_state.posterior)
+    if (!std::isfinite(p) || p < 0 || p > 1 + 1e-9)
+      throw Error(ErrorCode::kMapRefused,
+                  fmt::format("{}: filter_posterior row of location {} is damaged: posterior {} "
+                              "is not a probability",
+                              store_->path(), location, p));
   filter_state.previous_score = counters_.previous_score;
   filter_->restore(filter_state);
 }
