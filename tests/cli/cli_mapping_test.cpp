@@ -10,7 +10,9 @@
 #include <opencv2/videoio.hpp>
 #include <thread>
 
+#include "cli_scratch.h"
 #include "cli_test_support.h"
+#include "frame_log.h"
 #include "synthetic/synthetic_sequence.h"
 
 namespace placedb::testing {
@@ -320,6 +322,20 @@ TEST(CliSyntheticSequence, ResumeAfterLostCommitsCutsTheLogBack) {
   const CsvTable log = readCsv(b_log);
   EXPECT_EQ(frameColumn(log), range(0, 59));
   expectSameScoredRows(readCsv(dir / "a.csv"), log);
+}
+
+TEST(CliSyntheticSequence, LogToStandardOutput) {
+  auto seq = smallSequence(6);
+  auto dir = scratchDir("CliSynthetic_log_stdout");
+  auto r = placedb(
+      {"map", (dir / "m.placedb").string(), (seq / "frames.txt").string(), "--log", "-"}, dir);
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_FALSE(fs::exists(fs::current_path() / "-")) << "no file named -";
+  EXPECT_FALSE(fs::exists(dir / "-"));
+  std::ofstream(dir / "stdout.csv") << r.out;
+  const CsvTable log = readCsv(dir / "stdout.csv");
+  EXPECT_EQ(log.header, cli::FrameLogWriter::columns());
+  EXPECT_EQ(frameColumn(log), range(0, 5));
 }
 
 TEST(CliSyntheticSequence, VocabularyExport) {

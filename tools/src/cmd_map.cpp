@@ -62,7 +62,8 @@ Command addMapCommand(CLI::App& parent) {
       "  placedb map run.placedb walk.mp4 --preset paper --stop-after 500   # later: same again");
   app->add_option("MAP", request->map_path, "map file (SQLite)")->required();
   app->add_option("SOURCE", request->source, "image folder, list file or video")->required();
-  app->add_option("--log", request->log_path, "write (or append) the per-frame CSV log");
+  app->add_option("--log", request->log_path,
+                  "write (or append) the per-frame CSV log; - writes it to standard output");
   addSettingsOptions(*app, request->settings);
   app->add_option("--stop-after", *stop_after,
                   "process at most N frames, then close; the next `map` resumes")

@@ -114,6 +114,7 @@ void writeWhole(int fd, const std::string& text, off_t good_size, const std::str
 void FrameLogWriter::checkAppendable(const std::filesystem::path& path,
                                      std::optional<std::int64_t> resumed_session) {
   namespace fs = std::filesystem;
+  if (path == kStandardOutput) return;
   const std::string name = path.string();
   std::error_code ec;
   const auto status = fs::status(path, ec);
@@ -152,6 +153,7 @@ void FrameLogWriter::checkAppendable(const std::filesystem::path& path,
 std::vector<std::int64_t> FrameLogWriter::cutBack(const std::filesystem::path& path,
                                                   std::int64_t session, std::int64_t first_index) {
   std::vector<std::int64_t> dropped;
+  if (path == kStandardOutput) return dropped;
   std::ifstream in(path, std::ios::binary);
   if (!in) return dropped;  // no log yet
   const std::string name = path.string();
@@ -193,7 +195,9 @@ std::vector<std::int64_t> FrameLogWriter::cutBack(const std::filesystem::path& p
 }
 
 FrameLogWriter::FrameLogWriter(const std::filesystem::path& path) : path_(path.string()) {
-  fd_ = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  fd_ = path_ == kStandardOutput
+            ? ::fcntl(STDOUT_FILENO, F_DUPFD_CLOEXEC, 0)
+            : ::open(path_.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
   if (fd_ < 0)
     throw Error(ErrorCode::kIo,
                 fmt::format("cannot write log {}: {}", path_, std::strerror(errno)));

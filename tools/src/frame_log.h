@@ -25,6 +25,9 @@
 
 namespace placedb::cli {
 
+// `--log -`: the rows go to standard output (everything else `map` prints goes to stderr).
+inline const std::filesystem::path kStandardOutput = "-";
+
 class FrameLogWriter {
  public:
   // Appends to an existing non-empty log (no second header); creates it otherwise.
