@@ -23,8 +23,24 @@ void applyMigrations(Database& db, int target_version) {
                          error.sqliteCode(), error.sqliteMessage(), error.sql());
     }
     try {
-      if (db.queryInt("PRAGMA user_version") < migration.version) {
-        db.exec(migration.sql);
+      const int found_version = static_cast<int>(db.queryInt("PRAGMA user_version"));
+      if (found_version < migration.version) {
+        try {
+          db.exec(migration.sql);
+        } catch (const StorageError& error) {
+          if (error.code() == ErrorCode::kDiskFull || error.code() == ErrorCode::kMapBusy ||
+              error.code() == ErrorCode::kIo)
+            throw;
+          // The upgrade of a map whose tables do not match its schema version (a damaged
+          // user_version) fails inside the migration's SQL: one line naming the map and the
+          // step, not the whole script.
+          throw StorageError(ErrorCode::kMapRefused,
+                             "map " + db.label() + " cannot be upgraded from schema " +
+                                 std::to_string(found_version) + " (migration " + migration.name +
+                                 "): " + error.sqliteMessage() +
+                                 "; its tables do not match its schema version",
+                             error.sqliteCode(), error.sqliteMessage());
+        }
         if (db.queryInt("SELECT count(*) FROM pragma_foreign_key_check") != 0) {
           throw StorageError(ErrorCode::kInternal, std::string("migration ") + migration.name +
                                                        " leaves foreign keys violated");

@@ -5,11 +5,13 @@
 #include <sqlite3.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "cli_scratch.h"
 #include "placedb/storage/map_store.h"
+#include "placedb/storage/migrations.h"
 #include "vocabulary/vocabulary_file.h"
 
 namespace placedb::testing {
@@ -160,6 +162,21 @@ TEST(CliFaults, DamagedEngineValuesAreRefusedBeforeAnyWrite) {
     EXPECT_NE(r.err.find(names), std::string::npos) << r.err;
     EXPECT_TRUE(bytesOf(map) == before) << names;
   }
+}
+
+// A schema version one below the tables' (a damaged user_version): the upgrade fails on the
+// first change the tables already have. One line naming the map, exit 4, the map unchanged.
+TEST(CliFaults, SchemaVersionBelowTheTablesIsOneLineRefusal) {
+  auto seq = smallSequence(6);
+  auto dir = scratchDir("CliFaults_user_version");
+  auto map = mappedCopy(seq, dir, "m.placedb", {"--stop-after", "3"});
+  sqlExec(map, "PRAGMA user_version = " + std::to_string(storage::currentSchemaVersion() - 1));
+  const std::string before = bytesOf(map);
+  auto r = placedb({"map", map.string(), (seq / "frames.txt").string(), "-q"}, dir);
+  expectCleanError(r, 4, map.string());
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_EQ(r.err.find("in statement"), std::string::npos) << r.err;
+  EXPECT_TRUE(bytesOf(map) == before);
 }
 
 TEST(CliFaults, MissingTablesAreRefusedNotStorageFailures) {
