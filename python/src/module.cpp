@@ -249,13 +249,26 @@ void bindResults(py::module_& m) {
       .def_readonly("clean_close", &SessionInfo::clean_close)
       .def_readonly("frames", &SessionInfo::frames)
       .def_readonly("last_source_index", &SessionInfo::last_source_index);
+  // What `placedb query --json` holds, under the same names.
   py::class_<QueryMatch>(m, "QueryMatch")
       .def_readonly("location_id", &QueryMatch::location_id)
-      .def_readonly("similarity", &QueryMatch::similarity)
+      .def_property_readonly(
+          "tier", [](const QueryMatch& q) { return std::string(storage::toString(q.tier)); },
+          "stm, wm or ltm")
+      .def_readonly("similarity", &QueryMatch::similarity, "eq. 5 (LTM: 0 until checked)")
+      .def_readonly("code_similarity", &QueryMatch::code_similarity)
+      .def_readonly("inliers", &QueryMatch::inliers, "the geometric check's, 0 when it did not run")
+      .def_readonly("verified", &QueryMatch::verified, "the geometric check passed")
       .def_readonly("frames", &QueryMatch::frames);
   py::class_<QueryResult>(m, "QueryResult")
+      .def_property_readonly(
+          "verdict", [](const QueryResult& r) { return std::string(toString(r.verdict)); },
+          "known (the best match passed the geometric check), unknown, or unverified (the "
+          "map's settings switch the check off)")
       .def_readonly("feature_count", &QueryResult::feature_count)
-      .def_readonly("matches", &QueryResult::matches, "best first")
+      .def_readonly("matches", &QueryResult::matches, "best first: verified ones by inliers")
+      .def_readonly("searched", &QueryResult::searched, "locations compared, all tiers")
+      .def_readonly("checked", &QueryResult::checked, "candidates the geometric check ran on")
       .def_readonly("time_ms", &QueryResult::time_ms);
 }
 

@@ -54,6 +54,12 @@ def test_reads_and_queries_image_files(tmp_path):
         result = m.query_file(str(tmp_path / "1.png"))
         assert result.matches
         assert any(f.source_index == 1 for f in result.matches[0].frames)
+        assert result.verdict in ("known", "unknown")
+        assert result.searched >= 1 and result.checked >= 1
+        best = result.matches[0]
+        assert best.tier in ("stm", "wm", "ltm")
+        assert best.inliers >= 0 and isinstance(best.verified, bool)
+        assert (result.verdict == "known") == best.verified
         with pytest.raises(placedb.IoError) as missing:
             m.query_file(str(tmp_path / "absent.png"))
         assert "absent.png" in str(missing.value)
