@@ -510,6 +510,13 @@ std::optional<LocationRecord> MapStore::location(std::int64_t location_id) const
                         static_cast<Tier>(s->columnInt(3)), s->columnOptionalInt(4)};
 }
 
+std::int64_t MapStore::acceptedClosureCount(bool posed) const {
+  auto s = db_->cached(posed ? "SELECT count(*) FROM v_loop_closure_poses"
+                             : "SELECT count(*) FROM hypotheses WHERE accepted = 1");
+  s->step();
+  return s->columnInt(0);
+}
+
 std::int64_t MapStore::linkCount(LinkType type) const {
   auto s = db_->cached("SELECT count(*) FROM links WHERE type = ?1");
   s->bind(1, static_cast<std::int64_t>(type));

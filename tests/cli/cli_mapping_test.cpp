@@ -2,6 +2,8 @@
 // (rtabmap_samples, skipped when absent) and on a synthetic sequence made here.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <chrono>
 #include <fstream>
 #include <iterator>
@@ -95,6 +97,47 @@ TEST(CliRealSequence, RosCalibrationYamlGivesClosuresAPose) {
   ASSERT_GT(closures, 30);
   EXPECT_LT(appearance_only, closures / 2) << "most closures carry a pose";
   EXPECT_GT(edges, closures);
+}
+
+// One definition of each count: map's closure lines and summary, info and the log agree on
+// frames, bad frames and accepted closures; loop-closure links are fewer where frames merged
+// into one location close on one place.
+TEST(CliRealSequence, CountsAgreeAcrossMapInfoAndLog) {
+  fs::path data = dataset("rtabmap_samples");
+  if (data.empty()) GTEST_SKIP() << "rtabmap_samples absent under " << datasetsDir();
+  auto dir = scratchDir("CliReal_counts");
+  auto map = dir / "run.placedb", log = dir / "run.csv";
+  auto mapped =
+      placedb({"map", map.string(), (data / "frames.txt").string(), "--log", log.string()}, dir);
+  ASSERT_EQ(mapped.exit_code, 0) << describe(mapped);
+  const CsvTable table = readCsv(log);
+  std::int64_t accepted = 0, bad = 0;
+  for (std::size_t i = 0; i < table.rows.size(); ++i) {
+    accepted += table.cell(i, table.column("accepted")) == "1";
+    bad += table.cell(i, table.column("outcome")) == "bad";
+  }
+  ASSERT_GT(accepted, 30);
+  std::int64_t lines = 0;
+  for (std::size_t at = 0;
+       (at = mapped.err.find("closes a loop on frame", at)) != std::string::npos; ++at)
+    ++lines;
+  EXPECT_EQ(lines, accepted);
+  EXPECT_NE(mapped.err.find(fmt::format("84 frames ({} bad, 0 of them unreadable)", bad)),
+            std::string::npos)
+      << mapped.err;
+  EXPECT_NE(mapped.err.find(fmt::format("accepted loop closures {}", accepted)), std::string::npos)
+      << mapped.err;
+  const nlohmann::json j = info(map.string(), dir);
+  EXPECT_EQ(j["frames"], 84);
+  EXPECT_EQ(j["bad_frames"], bad);
+  EXPECT_EQ(j["accepted_closures"], accepted);
+  EXPECT_EQ(j["posed_closures"], 0) << "no intrinsics, no pose";
+  EXPECT_LE(j["loop_closures"].get<std::int64_t>(), accepted);
+  auto text = placedb({"info", map.string()}, dir);
+  EXPECT_NE(
+      text.out.find(fmt::format("frames 84 ({} bad), accepted loop closures {}", bad, accepted)),
+      std::string::npos)
+      << text.out;
 }
 
 TEST(CliRealSequence, MapEvalInfoQueryOnRtabmapSamples) {
@@ -192,9 +235,11 @@ TEST(CliRealSequence, MapEvalInfoQueryOnRtabmapSamples) {
   auto text = placedb({"info", map.string()}, dir);
   EXPECT_EQ(text.exit_code, 0);
   EXPECT_NE(text.out.find("session 1: 84 frames"), std::string::npos) << text.out;
-  EXPECT_NE(text.out.find("frames 84 (" + std::to_string(bad_in_log) + " bad), loop closures " +
-                          about["loop_closures"].dump()),
+  EXPECT_NE(text.out.find("frames 84 (" + std::to_string(bad_in_log) + " bad), accepted loop " +
+                          "closures " + about["accepted_closures"].dump()),
             std::string::npos)
+      << text.out;
+  EXPECT_NE(text.out.find("loop-closure links " + about["loop_closures"].dump()), std::string::npos)
       << text.out;
   EXPECT_NE(text.out.find("in the kd-index after the last frame"), std::string::npos) << text.out;
 

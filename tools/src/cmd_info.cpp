@@ -53,7 +53,11 @@ nlohmann::json inspectMap(const std::string& path) {
   const auto last_frame = store.lastFrame();
   info["index_words"] =
       last_frame ? nlohmann::json(last_frame->stats.vocabulary_size) : nlohmann::json();
+  // One definition of each count, in the words map's summary uses: accepted closures are
+  // frames whose hypothesis was accepted, loop closures are links between two locations.
   info["loop_closures"] = store.linkCount(storage::LinkType::kLoopClosure);
+  info["accepted_closures"] = store.acceptedClosureCount();
+  info["posed_closures"] = store.acceptedClosureCount(/*posed=*/true);
 
   // Locations per tier, and which session made each one (for the links between sessions).
   std::map<std::int64_t, std::int64_t> session_of;
@@ -118,12 +122,13 @@ namespace {
 std::string describe(const nlohmann::json& info) {
   std::string text = fmt::format(
       "map {}: {:.1f} MiB, schema version {}\n"
-      "frames {} ({} bad), loop closures {}\n"
+      "frames {} ({} bad), accepted loop closures {} ({} with a pose), loop-closure links {}\n"
       "words {} stored{}\n"
       "locations {} (STM {}, WM {}, LTM {})\n",
       info["path"].get<std::string>(), info["file_bytes"].get<double>() / (1024.0 * 1024.0),
       info["schema_version"].get<int>(), info["frames"].get<std::int64_t>(),
-      info["bad_frames"].get<std::int64_t>(), info["loop_closures"].get<std::int64_t>(),
+      info["bad_frames"].get<std::int64_t>(), info["accepted_closures"].get<std::int64_t>(),
+      info["posed_closures"].get<std::int64_t>(), info["loop_closures"].get<std::int64_t>(),
       info["words"].get<std::int64_t>(),
       info["index_words"].is_null() ? std::string()
                                     : fmt::format(", {} in the kd-index after the last frame",

@@ -86,9 +86,10 @@ Command addMapCommand(CLI::App& parent) {
               std::string why = s.interrupted     ? "interrupted; run again to resume"
                                 : s.stopped_early ? "stopped by --stop-after; run again to resume"
                                                   : "end of source";
-              std::fputs(fmt::format("placedb: session {}: {} frames ({} unreadable) in {:.1f} s, "
-                                     "{} new locations, {} loop closures ({})\n",
-                                     s.session_id, s.processed, s.unreadable, s.seconds,
+              std::fputs(fmt::format("placedb: session {}: {} frames ({} bad, {} of them "
+                                     "unreadable) in {:.1f} s, {} new locations, accepted loop "
+                                     "closures {} ({})\n",
+                                     s.session_id, s.processed, s.bad, s.unreadable, s.seconds,
                                      s.locations_created, s.loop_closures, why)
                              .c_str(),
                          stderr);

@@ -92,6 +92,22 @@ std::optional<ResumePoint> sessionToResume(const Map& map, const ImageSource& so
   return ResumePoint{last->id, *next, {}};
 }
 
+// "frame 52 closes a loop on frames 10 11 (location 12, score 0.874, 23 inliers)"; frames of
+// other sessions as SESSION:INDEX, as in the log.
+std::string closureLine(const FrameResult& r) {
+  std::string frames;
+  for (const auto& ref : r.hypothesis.frames)
+    frames +=
+        (frames.empty() ? "" : " ") +
+        (ref.session_id == r.session_id ? std::to_string(ref.source_index)
+                                        : fmt::format("{}:{}", ref.session_id, ref.source_index));
+  return fmt::format(
+      "placedb: frame {} closes a loop on frame{} {} (location {}, score {:.3f}, "
+      "{} inliers{})\n",
+      r.source_index, r.hypothesis.frames.size() == 1 ? "" : "s", frames, r.hypothesis.location_id,
+      r.hypothesis.score, r.hypothesis.inliers, r.hypothesis.pose ? ", pose" : "");
+}
+
 }  // namespace
 
 MappingSummary runMapping(const MappingRequest& request) {
@@ -192,7 +208,14 @@ MappingSummary runMapping(const MappingRequest& request) {
     }
     ++summary.processed;
     if (result.outcome == FrameOutcome::kNewLocation) ++summary.locations_created;
-    if (result.hypothesis.accepted) ++summary.loop_closures;
+    if (result.outcome == FrameOutcome::kBad) ++summary.bad;
+    if (result.hypothesis.accepted) {
+      ++summary.loop_closures;
+      if (progress) {
+        progress->clearLine();
+        std::fputs(closureLine(result).c_str(), stderr);
+      }
+    }
     if (log) log->write(result);
     if (progress)
       progress->update({frame.index, summary.locations_created,

@@ -21,7 +21,7 @@ struct MappingRequest {
   SettingsInput settings;
   std::optional<std::int64_t> stop_after;
   bool new_session = false;
-  bool quiet = false;  // no progress output
+  bool quiet = false;  // no progress output, no line per accepted loop closure
 };
 
 struct MappingSummary {
@@ -30,7 +30,8 @@ struct MappingSummary {
   std::int64_t first_index = 0;  // source index this run started from
   std::int64_t processed = 0;    // frames processed by this run
   std::int64_t unreadable = 0;
-  std::int64_t loop_closures = 0;
+  std::int64_t bad = 0;            // frames recorded as bad (the unreadable ones among them)
+  std::int64_t loop_closures = 0;  // frames whose loop-closure hypothesis was accepted
   std::int64_t locations_created = 0;
   bool interrupted = false;    // Ctrl-C / SIGTERM
   bool stopped_early = false;  // --stop-after

@@ -162,6 +162,9 @@ class MapStore {
   // Every link of one type, by (location_a, location_b).
   std::vector<LinkRecord> linksOfType(LinkType type) const;
   std::int64_t linkCount(LinkType type) const;
+  // Frames whose loop-closure hypothesis was accepted (several frames merged into one location
+  // that close on one place make one loop-closure link); `posed`: only those with a pose.
+  std::int64_t acceptedClosureCount(bool posed = false) const;
   // Locations linked to `location_id` (by `type`, or any link) that sit in `tier`, ascending.
   std::vector<std::int64_t> linkedInTier(std::int64_t location_id, Tier tier,
                                          std::optional<LinkType> type = std::nullopt) const;
