@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -50,81 +51,87 @@ py::object jsonToPython(const nlohmann::json& value) {
 
 // A map as Python holds it: closing is explicit (close(), or leaving a `with` block) and any
 // use afterwards is refused instead of reaching a closed engine.
+//
+// One Map may be shared between threads. The engine is not thread-safe and its calls release
+// the GIL, so every call holds the Map's mutex while it runs: calls from several threads are
+// serialised, and close() waits for the call in flight. The mutex is taken only with the GIL
+// released (a thread waiting for it must not keep the thread that holds it from returning).
 class PyMap {
  public:
   PyMap(const std::string& path, const std::optional<py::dict>& settings, bool read_only)
       : map_(Map::open(path, optionsOf(settings),
                        read_only ? Map::Mode::kLocalisation : Map::Mode::kMapping)) {}
 
-  Map& map() {
+  // Runs `call` on the open map, the GIL released and the mutex held.
+  template <class Call>
+  auto locked(Call&& call) {
+    py::gil_scoped_release unlocked;
+    std::lock_guard<std::mutex> lock(mutex_);
     if (!map_) throw Error(ErrorCode::kInvalidArgument, "the map is closed");
-    return *map_;
+    return call(*map_);
   }
 
   SessionInfo beginSession(const std::string& source) {
-    SessionInfo session = map().beginSession(source);
-    next_index_ = 0;
-    return session;
+    return locked([&](Map& map) {
+      SessionInfo session = map.beginSession(source);
+      next_index_ = 0;
+      return session;
+    });
   }
 
   SessionInfo resumeSession(std::int64_t id) {
-    SessionInfo session = map().resumeSession(id);
-    next_index_ = session.last_source_index ? *session.last_source_index + 1 : 0;
-    return session;
+    return locked([&](Map& map) {
+      SessionInfo session = map.resumeSession(id);
+      next_index_ = session.last_source_index ? *session.last_source_index + 1 : 0;
+      return session;
+    });
   }
 
   FrameResult process(const py::array& image, std::optional<std::int64_t> source_index,
                       const std::string& source_path) {
     py::array contiguous;
-    cv::Mat mat = imageOf(image, contiguous);
-    const std::int64_t index = source_index.value_or(next_index_);
-    Map& target = map();
-    FrameResult result;
-    {
-      py::gil_scoped_release unlocked;
-      result = target.process(mat, index, source_path);
-    }
-    next_index_ = index + 1;
-    return result;
+    const cv::Mat mat = imageOf(image, contiguous);
+    return locked([&](Map& map) {
+      const std::int64_t index = source_index.value_or(next_index_);
+      FrameResult result = map.process(mat, index, source_path);
+      next_index_ = index + 1;
+      return result;
+    });
   }
 
   // An image file read as `placedb map` reads it; an unreadable one is recorded as a bad frame.
   FrameResult processFile(const std::string& path, std::optional<std::int64_t> source_index) {
-    const std::int64_t index = source_index.value_or(next_index_);
-    Map& target = map();
-    FrameResult result;
-    {
-      py::gil_scoped_release unlocked;
+    return locked([&](Map& map) {
+      const std::int64_t index = source_index.value_or(next_index_);
       std::string problem;
       const cv::Mat image = cli::readImageFile(path, problem);
-      result =
-          image.empty() ? target.recordUnreadable(index, path) : target.process(image, index, path);
-    }
-    next_index_ = index + 1;
-    return result;
+      FrameResult result =
+          image.empty() ? map.recordUnreadable(index, path) : map.process(image, index, path);
+      next_index_ = index + 1;
+      return result;
+    });
   }
 
   QueryResult queryFile(const std::string& path, std::size_t top) {
     const cv::Mat image = readImage(path);
-    Map& target = map();
-    py::gil_scoped_release unlocked;
-    return target.query(image, top);
+    return locked([&](Map& map) { return map.query(image, top); });
   }
 
   QueryResult query(const py::array& image, std::size_t top) {
     py::array contiguous;
-    cv::Mat mat = imageOf(image, contiguous);
-    Map& target = map();
-    py::gil_scoped_release unlocked;
-    return target.query(mat, top);
+    const cv::Mat mat = imageOf(image, contiguous);
+    return locked([&](Map& map) { return map.query(mat, top); });
   }
 
   void close() {
+    py::gil_scoped_release unlocked;
+    std::lock_guard<std::mutex> lock(mutex_);
     if (map_) map_->close();
     map_.reset();
   }
 
  private:
+  std::mutex mutex_;
   std::unique_ptr<Map> map_;
   std::int64_t next_index_ = 0;
 };
@@ -272,18 +279,27 @@ void bindResults(py::module_& m) {
       .def_readonly("time_ms", &QueryResult::time_ms);
 }
 
+std::string pathOf(PyMap& self) {
+  return self.locked([](Map& map) { return map.path(); });
+}
+
 void bindMap(py::module_& m) {
   py::class_<PyMap>(m, "Map",
                     "A placedb map file: Map(path, settings=None, read_only=False). read_only "
-                    "opens it for queries and never changes the file.")
+                    "opens it for queries and never changes the file. One Map may be shared "
+                    "between threads: its calls run one at a time, and close() waits for the "
+                    "call in flight. To localise against a map being built, open a second, "
+                    "read-only Map on the same file.")
       .def(py::init<const std::string&, const std::optional<py::dict>&, bool>(), py::arg("path"),
            py::arg("settings") = py::none(), py::arg("read_only") = false)
       .def("begin_session", &PyMap::beginSession, py::arg("source"),
            "Starts a new session; source names where the images come from")
       .def("resume_session", &PyMap::resumeSession, py::arg("session_id"),
            "Continues an interrupted session with its own settings")
-      .def("last_session", [](PyMap& self) { return self.map().lastSession(); })
-      .def("sessions", [](PyMap& self) { return self.map().sessions(); })
+      .def("last_session",
+           [](PyMap& self) { return self.locked([](Map& map) { return map.lastSession(); }); })
+      .def("sessions",
+           [](PyMap& self) { return self.locked([](Map& map) { return map.sessions(); }); })
       .def("process", &PyMap::process, py::arg("image"), py::arg("source_index") = py::none(),
            py::arg("source_path") = "",
            "Maps one numpy image (grey H x W, or BGR H x W x 3); commits it before returning. "
@@ -304,16 +320,21 @@ void bindMap(py::module_& m) {
             if (mode != "fixed" && mode != "seed")
               throw Error(ErrorCode::kInvalidArgument,
                           fmt::format("mode {} is not valid (valid: fixed|seed)", mode));
-            return self.map().importVocabulary(
-                file, isRtabmap(format),
-                mode == "fixed" ? VocabularyMode::kFixed : VocabularyMode::kSeed);
+            return self.locked([&](Map& map) {
+              return map.importVocabulary(
+                  file, isRtabmap(format),
+                  mode == "fixed" ? VocabularyMode::kFixed : VocabularyMode::kSeed);
+            });
           },
           py::arg("file"), py::arg("mode") = "fixed", py::arg("format") = "placedb")
-      .def_property_readonly("settings",
-                             [](PyMap& self) { return self.map().options().toSettings(); })
-      .def_property_readonly("path", [](PyMap& self) { return self.map().path(); })
-      .def("info", [](PyMap& self) { return jsonToPython(cli::inspectMap(self.map().path())); })
-      .def("loop_closures", [](PyMap& self) { return loopClosureRows(self.map().path()); })
+      .def_property_readonly(
+          "settings",
+          [](PyMap& self) {
+            return self.locked([](Map& map) { return map.options().toSettings(); });
+          })
+      .def_property_readonly("path", [](PyMap& self) { return pathOf(self); })
+      .def("info", [](PyMap& self) { return jsonToPython(cli::inspectMap(pathOf(self))); })
+      .def("loop_closures", [](PyMap& self) { return loopClosureRows(pathOf(self)); })
       .def("close", &PyMap::close, "Ends the session cleanly; safe to call twice")
       .def("__enter__", [](PyMap& self) -> PyMap& { return self; })
       .def("__exit__", [](PyMap& self, const py::args&) { self.close(); });

@@ -217,3 +217,60 @@ def test_maps_image_files_of_a_list_and_records_unreadable_ones(tmp_path):
 def test_settings_catalogue():
     keys = {s["key"] for s in placedb.settings()}
     assert {"t_loop", "kd_trees", "word_rule"} <= keys
+
+
+def test_one_map_is_safe_to_share_between_threads(tmp_path):
+    import threading
+
+    path = str(tmp_path / "threads.placedb")
+    errors = []
+
+    def run(fn):
+        try:
+            fn()
+        except Exception as e:  # noqa: BLE001 - collected and asserted below
+            errors.append(e)
+
+    with placedb.Map(path) as m:
+        m.begin_session("threads")
+        workers = [threading.Thread(target=run, args=(lambda k=k: [m.process(scene(10 * k + i))
+                                                                   for i in range(5)],))
+                   for k in range(2)]
+        for w in workers:
+            w.start()
+        for w in workers:
+            w.join()
+        assert not errors, errors
+        assert m.last_session().frames == 10
+        # Localising against the map being built is a separate, read-only Map.
+        with pytest.raises(placedb.InvalidArgument) as writable:
+            m.query(scene(0))
+        assert "read-only" in str(writable.value)
+
+    reader = placedb.Map(path, read_only=True)
+    workers = [threading.Thread(target=run, args=(lambda: [reader.query(scene(i)) for i in
+                                                           range(4)],)) for _ in range(4)]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join()
+    assert not errors, errors
+
+    # close() while another thread queries: it waits for the call in flight; later calls are
+    # refused, never a crash.
+    outcomes = []
+
+    def query_until_closed():
+        for i in range(20):
+            try:
+                reader.query(scene(i))
+                outcomes.append("answered")
+            except placedb.InvalidArgument as e:
+                assert "closed" in str(e)
+                outcomes.append("closed")
+
+    worker = threading.Thread(target=query_until_closed)
+    worker.start()
+    reader.close()
+    worker.join()
+    assert len(outcomes) == 20

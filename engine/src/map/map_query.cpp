@@ -15,6 +15,8 @@
 // passes it (the mapping's geometry rule), "unknown" when none does. A place never seen still
 // finds look-alike candidates, but their matches do not agree on one epipolar geometry, so it
 // is reported unknown instead of as its nearest look-alike.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <chrono>
 #include <map>
@@ -84,6 +86,14 @@ void MapImpl::loadPlaceNeighbourhood() {
 }
 
 QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
+  // A mapping map's vocabulary grows with every frame; a read-only one on the same file (SQLite
+  // lets it read while the writer maps) answers from the last committed frame.
+  if (mode_ != Mode::kLocalisation)
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("{}: query() needs the map opened read-only (localisation); to "
+                            "localise against a map being built, open a second, read-only map "
+                            "on the same file",
+                            store_->path()));
   const auto start = std::chrono::steady_clock::now();
   QueryResult result;
   Features features = extractor_->extract(toGrey8(image));
