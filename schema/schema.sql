@@ -1,4 +1,4 @@
--- placedb map schema: the current version (7), as one file.
+-- placedb map schema: the current version (8), as one file.
 -- It must equal the result of applying migrations/0001..N in order; a test compares
 -- sqlite_master of both. `sqlite3 new.db < schema/schema.sql` makes an empty placedb map.
 -- See schema/SCHEMA.md for the meaning of every table, column and view.
@@ -89,7 +89,8 @@ CREATE TABLE words (
   dim INTEGER NOT NULL CHECK (dim > 0),
   descriptor BLOB NOT NULL
     CHECK (length(descriptor) = dim * (CASE descriptor_type WHEN 0 THEN 4 ELSE 1 END)),
-  source_frame INTEGER               -- imported words: creating frame in their source map
+  source_frame INTEGER,              -- imported words: creating frame in their source map
+  checksum INTEGER                   -- CRC-32C of the row (schema 8; see SCHEMA.md)
 );
 CREATE INDEX words_by_created_frame ON words (created_frame);
 -- Imported words only (schema 2): read on every open, so kept apart from the whole vocabulary.
@@ -146,7 +147,8 @@ CREATE INDEX hypotheses_by_location ON hypotheses (best_location_id);
 -- Engine state needed for an exact resume.
 CREATE TABLE engine_state (
   key TEXT PRIMARY KEY,
-  value BLOB
+  value BLOB,
+  checksum INTEGER                   -- CRC-32C of key and value (schema 8)
 ) WITHOUT ROWID;
 
 -- The vocabulary's kd-forest: its internal nodes, updated every frame. A node id that is not a
@@ -158,6 +160,7 @@ CREATE TABLE kd_nodes (
   right_child INTEGER NOT NULL,
   split_dim INTEGER NOT NULL,
   split_value REAL NOT NULL,
+  checksum INTEGER,                  -- CRC-32C of the row (schema 8)
   PRIMARY KEY (tree, node)
 ) WITHOUT ROWID;
 
@@ -233,7 +236,8 @@ WHERE h.accepted = 1 AND h.pose_qw IS NOT NULL;
 -- Place codes: a compact global descriptor of every location, in every tier (signed bytes).
 CREATE TABLE place_codes (
   location_id INTEGER PRIMARY KEY REFERENCES locations (id) ON DELETE CASCADE,
-  code BLOB NOT NULL
+  code BLOB NOT NULL,
+  checksum INTEGER                   -- CRC-32C of location_id and code (schema 8)
 );
 
 -- The order in which locations entered STM/WM (a location retrieved from LTM enters again): the
@@ -243,7 +247,10 @@ CREATE TABLE wm_entries (
   wm_age INTEGER NOT NULL
 );
 
+-- kd_nodes' row count, with its CRC-32C (schema 8): an empty map has no kd-forest nodes.
+INSERT INTO engine_state (key, value, checksum) VALUES ('storage.kd_nodes.rows', '0', 4094527944);
+
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 7;
+PRAGMA user_version = 8;
 COMMIT;

@@ -21,5 +21,6 @@ target_sources(placedb_storage PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/map_store_links.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_store_state.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/records.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/row_checksums.cpp
   ${PLACEDB_MIGRATIONS_CPP})
 target_include_directories(placedb_storage PRIVATE ${CMAKE_CURRENT_LIST_DIR}/src)

@@ -175,10 +175,11 @@ MapStore::MapStore(const std::string& given_path, OpenMode mode, const OpenOptio
     return;
   }
 
+  bool check_pages = false;
   if (state == detail::FileState::kSqlite) {
     // Judge through a read-only connection first, so a refused file is never written to: its
-    // identity, then every page, since a write can spread damage that no read of this session
-    // would have met.
+    // identity here, every page below (a write can spread damage that no read of this session
+    // would have met).
     auto reader = detail::openForInspection(path);
     const auto verdict = detail::judgeIdentity(detail::readIdentity(*reader, path), path, current);
     std::error_code size_error;
@@ -186,8 +187,7 @@ MapStore::MapStore(const std::string& given_path, OpenMode mode, const OpenOptio
     const bool small_enough =
         options.integrity_check_max_bytes <= 0 ||
         (!size_error && std::int64_t(bytes) <= options.integrity_check_max_bytes);
-    if (verdict != detail::Verdict::kBlankSqlite && small_enough)
-      detail::checkIntegrity(*reader, path);
+    check_pages = verdict != detail::Verdict::kBlankSqlite && small_enough;
     if (verdict == detail::Verdict::kUpToDate) detail::checkSchemaObjects(*reader, path);
   }
   lock_fd_ = acquireWriterLock(path);
@@ -198,6 +198,9 @@ MapStore::MapStore(const std::string& given_path, OpenMode mode, const OpenOptio
                          "map " + path + " is read-only; open it with OpenMode::kReadOnly");
     }
     sqlite3_busy_timeout(db_->handle(), options.busy_timeout_ms);
+    // On this connection, before its first write: SQLite verifies CHECK constraints in
+    // quick_check only on a connection that could write (a tier of 7 passes a read-only one).
+    if (check_pages) detail::checkIntegrity(*db_, path);
     if (options.max_page_count > 0) {
       db_->queryInt("PRAGMA max_page_count = " + std::to_string(options.max_page_count));
     }

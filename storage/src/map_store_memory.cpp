@@ -3,24 +3,30 @@
 
 #include "database.h"
 #include "placedb/storage/map_store.h"
+#include "row_checksums.h"
 #include "write_scope.h"
 
 namespace placedb::storage {
 
 void MapStore::putPlaceCode(std::int64_t location_id, const std::vector<std::int8_t>& code) {
   WriteScope scope(*this);
-  auto s = db_->cached("INSERT OR REPLACE INTO place_codes (location_id, code) VALUES (?1, ?2)");
+  auto s = db_->cached(
+      "INSERT OR REPLACE INTO place_codes (location_id, code, checksum) VALUES (?1, ?2, ?3)");
   s->bind(1, location_id);
   s->bindBlob(2, code.data(), code.size());
+  s->bind(3, std::int64_t{detail::placeCodeChecksum(location_id, code.data(), code.size())});
   s->run();
   scope.commit();
 }
 
 std::vector<PlaceCodeRecord> MapStore::placeCodes() const {
-  auto s = db_->cached("SELECT location_id, code FROM place_codes ORDER BY location_id");
+  auto s = db_->cached("SELECT location_id, code, checksum FROM place_codes ORDER BY location_id");
   std::vector<PlaceCodeRecord> result;
   while (s->step()) {
     const auto [data, size] = s->columnBlobView(1);
+    if (!detail::checksumMatches(*s, 2, detail::placeCodeChecksum(s->columnInt(0), data, size)))
+      detail::refuseDamagedRow(path_, "place_codes", std::to_string(s->columnInt(0)),
+                               "fails its checksum");
     PlaceCodeRecord r{s->columnInt(0), std::vector<std::int8_t>(size)};
     if (size) std::memcpy(r.code.data(), data, size);
     result.push_back(std::move(r));
@@ -29,10 +35,13 @@ std::vector<PlaceCodeRecord> MapStore::placeCodes() const {
 }
 
 std::optional<std::vector<std::int8_t>> MapStore::placeCode(std::int64_t location_id) const {
-  auto s = db_->cached("SELECT code FROM place_codes WHERE location_id = ?1");
+  auto s = db_->cached("SELECT code, checksum FROM place_codes WHERE location_id = ?1");
   s->bind(1, location_id);
   if (!s->step()) return std::nullopt;
   const auto [data, size] = s->columnBlobView(0);
+  if (!detail::checksumMatches(*s, 1, detail::placeCodeChecksum(location_id, data, size)))
+    detail::refuseDamagedRow(path_, "place_codes", std::to_string(location_id),
+                             "fails its checksum");
   std::vector<std::int8_t> code(size);
   if (size) std::memcpy(code.data(), data, size);
   return code;

@@ -4,6 +4,7 @@
 
 #include "database.h"
 #include "placedb/storage/map_store.h"
+#include "row_checksums.h"
 #include "write_scope.h"
 
 namespace placedb::storage {
@@ -13,10 +14,11 @@ namespace placedb::storage {
 void MapStore::putState(const std::string& key, const std::vector<std::uint8_t>& value) {
   WriteScope scope(*this);
   auto s = db_->cached(
-      "INSERT INTO engine_state (key, value) VALUES (?1, ?2) "
-      "ON CONFLICT (key) DO UPDATE SET value = excluded.value");
+      "INSERT INTO engine_state (key, value, checksum) VALUES (?1, ?2, ?3) "
+      "ON CONFLICT (key) DO UPDATE SET value = excluded.value, checksum = excluded.checksum");
   s->bind(1, key);
   s->bindBlob(2, value.data(), value.size());
+  s->bind(3, std::int64_t{detail::stateChecksum(key, value.data(), value.size())});
   s->run();
   scope.commit();
 }
@@ -24,26 +26,33 @@ void MapStore::putState(const std::string& key, const std::vector<std::uint8_t>&
 void MapStore::putState(const std::string& key, const std::string& value) {
   WriteScope scope(*this);
   auto s = db_->cached(
-      "INSERT INTO engine_state (key, value) VALUES (?1, ?2) "
-      "ON CONFLICT (key) DO UPDATE SET value = excluded.value");
+      "INSERT INTO engine_state (key, value, checksum) VALUES (?1, ?2, ?3) "
+      "ON CONFLICT (key) DO UPDATE SET value = excluded.value, checksum = excluded.checksum");
   s->bind(1, key);
   s->bind(2, value);
+  s->bind(3, std::int64_t{detail::stateChecksum(key, value.data(), value.size())});
   s->run();
   scope.commit();
 }
 
 std::optional<std::vector<std::uint8_t>> MapStore::getState(const std::string& key) const {
-  auto s = db_->cached("SELECT value FROM engine_state WHERE key = ?1");
+  auto s = db_->cached("SELECT value, checksum FROM engine_state WHERE key = ?1");
   s->bind(1, key);
   if (!s->step()) return std::nullopt;
-  return s->columnBlob(0);
+  std::vector<std::uint8_t> value = s->columnBlob(0);
+  if (!detail::checksumMatches(*s, 1, detail::stateChecksum(key, value.data(), value.size())))
+    detail::refuseDamagedRow(path_, "engine_state", "'" + key + "'", "fails its checksum");
+  return value;
 }
 
 std::optional<std::string> MapStore::getStateText(const std::string& key) const {
-  auto s = db_->cached("SELECT value FROM engine_state WHERE key = ?1");
+  auto s = db_->cached("SELECT value, checksum FROM engine_state WHERE key = ?1");
   s->bind(1, key);
   if (!s->step()) return std::nullopt;
-  return s->columnText(0);
+  std::string value = s->columnText(0);
+  if (!detail::checksumMatches(*s, 1, detail::stateChecksum(key, value.data(), value.size())))
+    detail::refuseDamagedRow(path_, "engine_state", "'" + key + "'", "fails its checksum");
+  return value;
 }
 
 void MapStore::deleteState(const std::string& key) {
@@ -54,13 +63,28 @@ void MapStore::deleteState(const std::string& key) {
   scope.commit();
 }
 
+std::int64_t MapStore::storedKdNodeRows() const {
+  const auto text = getStateText(detail::kKdNodeRowsKey);
+  if (!text) detail::refuseDamagedRow(path_, "engine_state", detail::kKdNodeRowsKey, "is missing");
+  try {
+    std::size_t used = 0;
+    const long long rows = std::stoll(*text, &used);
+    if (used == text->size() && rows >= 0) return rows;
+  } catch (const std::exception&) {
+  }
+  detail::refuseDamagedRow(path_, "engine_state", detail::kKdNodeRowsKey, "is not a row count");
+}
+
 void MapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
                             const std::vector<std::pair<int, std::int64_t>>& deletions,
                             bool replace_all) {
   WriteScope scope(*this);
+  std::int64_t rows = 0;
   if (replace_all) {
     auto s = db_->cached("DELETE FROM kd_nodes");
     s->run();
+  } else {
+    rows = storedKdNodeRows();
   }
   if (!deletions.empty()) {
     auto s = db_->cached("DELETE FROM kd_nodes WHERE tree = ?1 AND node = ?2");
@@ -68,31 +92,42 @@ void MapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
       s->bind(1, std::int64_t(tree));
       s->bind(2, node);
       s->run();
+      rows -= sqlite3_changes(db_->handle());
     }
   }
   if (!upserts.empty()) {
-    auto s = db_->cached(
-        "INSERT INTO kd_nodes (tree, node, left_child, right_child, split_dim, split_value) "
-        "VALUES (?1, ?2, ?3, ?4, ?5, ?6) ON CONFLICT (tree, node) DO UPDATE SET "
-        "left_child = excluded.left_child, right_child = excluded.right_child, "
-        "split_dim = excluded.split_dim, split_value = excluded.split_value");
+    // An update first, an insert when no row changed: the row count follows without a count(*).
+    auto update = db_->cached(
+        "UPDATE kd_nodes SET left_child = ?3, right_child = ?4, split_dim = ?5, split_value = ?6, "
+        "checksum = ?7 WHERE tree = ?1 AND node = ?2");
+    auto insert = db_->cached(
+        "INSERT INTO kd_nodes (tree, node, left_child, right_child, split_dim, split_value, "
+        "checksum) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
     for (const KdNodeRecord& n : upserts) {
-      s->bind(1, std::int64_t(n.tree));
-      s->bind(2, n.node);
-      s->bind(3, n.left_child);
-      s->bind(4, n.right_child);
-      s->bind(5, std::int64_t(n.split_dim));
-      s->bind(6, n.split_value);
-      s->run();
+      const std::int64_t sum = detail::kdNodeChecksum(n.tree, n.node, n.left_child, n.right_child,
+                                                      n.split_dim, n.split_value);
+      for (detail::Statement* s : {&*update, &*insert}) {
+        s->bind(1, std::int64_t(n.tree));
+        s->bind(2, n.node);
+        s->bind(3, n.left_child);
+        s->bind(4, n.right_child);
+        s->bind(5, std::int64_t(n.split_dim));
+        s->bind(6, n.split_value);
+        s->bind(7, sum);
+        s->run();
+        if (s == &*insert) ++rows;
+        if (sqlite3_changes(db_->handle()) > 0) break;
+      }
     }
   }
+  putState(detail::kKdNodeRowsKey, std::to_string(rows));
   scope.commit();
 }
 
 std::vector<KdNodeRecord> MapStore::loadKdNodes() const {
   std::vector<KdNodeRecord> out;
   auto s = db_->cached(
-      "SELECT tree, node, left_child, right_child, split_dim, split_value FROM kd_nodes "
+      "SELECT tree, node, left_child, right_child, split_dim, split_value, checksum FROM kd_nodes "
       "ORDER BY tree, node");
   while (s->step()) {
     KdNodeRecord n;
@@ -102,8 +137,22 @@ std::vector<KdNodeRecord> MapStore::loadKdNodes() const {
     n.right_child = s->columnInt(3);
     n.split_dim = static_cast<int>(s->columnInt(4));
     n.split_value = s->columnDouble(5);
+    if (!detail::checksumMatches(
+            *s, 6,
+            detail::kdNodeChecksum(s->columnInt(0), n.node, n.left_child, n.right_child,
+                                   s->columnInt(4), n.split_value)))
+      detail::refuseDamagedRow(
+          path_, "kd_nodes",
+          "(tree " + std::to_string(s->columnInt(0)) + ", node " + std::to_string(n.node) + ")",
+          "fails its checksum");
     out.push_back(n);
   }
+  const std::int64_t stored = storedKdNodeRows();
+  if (stored != static_cast<std::int64_t>(out.size()))
+    throw StorageError(ErrorCode::kMapRefused,
+                       "map " + path_ + " damaged: kd_nodes holds " + std::to_string(out.size()) +
+                           " rows where the map recorded " + std::to_string(stored) +
+                           " (rows were deleted or added); nothing was written");
   return out;
 }
 

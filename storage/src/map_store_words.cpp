@@ -1,11 +1,13 @@
 // MapStore: the words of the vocabulary and the word references that make each location's
 // signature.
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <set>
 
 #include "database.h"
 #include "placedb/storage/map_store.h"
+#include "row_checksums.h"
 #include "write_scope.h"
 
 namespace placedb::storage {
@@ -21,7 +23,7 @@ void MapStore::insertWords(const std::vector<WordRecord>& words) {
   WriteScope scope(*this);
   auto s = db_->cached(
       "INSERT INTO words (id, created_frame, vocabulary_import_id, descriptor_type, dim, "
-      "descriptor, source_frame) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
+      "descriptor, source_frame, checksum) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)");
   for (const WordRecord& w : words) {
     if (w.dim <= 0 ||
         w.descriptor.size() != static_cast<std::size_t>(w.dim) * bytesPerValue(w.type)) {
@@ -37,6 +39,8 @@ void MapStore::insertWords(const std::vector<WordRecord>& words) {
     s->bind(5, std::int64_t{w.dim});
     s->bindBlob(6, w.descriptor.data(), w.descriptor.size());
     s->bind(7, w.source_frame);
+    s->bind(8, std::int64_t{detail::wordChecksum(w.id, w.created_frame, static_cast<int>(w.type),
+                                                 w.dim, w.descriptor.data(), w.descriptor.size())});
     s->run();
   }
   scope.commit();
@@ -45,7 +49,7 @@ void MapStore::insertWords(const std::vector<WordRecord>& words) {
 std::vector<WordRecord> MapStore::loadWords(const std::vector<std::int64_t>& word_ids) const {
   auto s = db_->cached(
       "SELECT id, created_frame, vocabulary_import_id, descriptor_type, dim, descriptor, "
-      "source_frame FROM words WHERE id = ?1");
+      "source_frame, checksum FROM words WHERE id = ?1");
   std::vector<WordRecord> result;
   result.reserve(word_ids.size());
   for (std::int64_t id : word_ids) {
@@ -60,6 +64,10 @@ std::vector<WordRecord> MapStore::loadWords(const std::vector<std::int64_t>& wor
     w.dim = static_cast<int>(s->columnInt(4));
     w.descriptor = s->columnBlob(5);
     w.source_frame = s->columnOptionalInt(6);
+    if (!detail::checksumMatches(*s, 7,
+                                 detail::wordChecksum(w.id, w.created_frame, s->columnInt(3), w.dim,
+                                                      w.descriptor.data(), w.descriptor.size())))
+      detail::refuseDamagedRow(path_, "words", std::to_string(w.id), "fails its checksum");
     result.push_back(std::move(w));
   }
   return result;
@@ -74,8 +82,8 @@ void MapStore::loadFloatDescriptors(const std::vector<std::int64_t>& word_ids, i
   // B-tree descent per word.
   constexpr int kMaxSkipped = 16;
   auto s = db_->cached(
-      "SELECT id, created_frame, descriptor_type, dim, descriptor FROM words WHERE id >= ?1 "
-      "ORDER BY id");
+      "SELECT id, created_frame, descriptor_type, dim, descriptor, checksum FROM words "
+      "WHERE id >= ?1 ORDER BY id");
   const std::size_t row_bytes = static_cast<std::size_t>(dim) * sizeof(float);
   auto missing = [&](std::int64_t id) {
     return StorageError(ErrorCode::kMapRefused,
@@ -100,7 +108,18 @@ void MapStore::loadFloatDescriptors(const std::vector<std::int64_t>& word_ids, i
         throw StorageError(ErrorCode::kMapRefused, "map " + path_ + ": word " + std::to_string(id) +
                                                        " is not a float descriptor of dimension " +
                                                        std::to_string(dim));
-      std::memcpy(rows + i * static_cast<std::size_t>(dim), data, row_bytes);
+      if (!detail::checksumMatches(
+              *s, 5,
+              detail::wordChecksum(id, s->columnOptionalInt(1), s->columnInt(2), dim, data, size)))
+        detail::refuseDamagedRow(path_, "words", std::to_string(id), "fails its checksum");
+      float* row = rows + i * static_cast<std::size_t>(dim);
+      std::memcpy(row, data, row_bytes);
+      // A word written with a NaN or infinity (by a placedb before checksums) would poison every
+      // distance to it; no extractor makes one.
+      for (int d = 0; d < dim; ++d)
+        if (!std::isfinite(row[d]))
+          detail::refuseDamagedRow(path_, "words", std::to_string(id),
+                                   "holds a value that is not a finite number");
       created[i] = s->isNull(1) ? -1 : s->columnInt(1);
       ++i;
       skipped = 0;

@@ -2,6 +2,7 @@
 
 #include "migrations_apply.h"
 #include "placedb/storage/migrations.h"
+#include "row_checksums.h"
 
 namespace placedb::storage {
 
@@ -27,6 +28,7 @@ void applyMigrations(Database& db, int target_version) {
       if (found_version < migration.version) {
         try {
           db.exec(migration.sql);
+          if (migration.version == kChecksumSchemaVersion) fillChecksums(db);
         } catch (const StorageError& error) {
           if (error.code() == ErrorCode::kDiskFull || error.code() == ErrorCode::kMapBusy ||
               error.code() == ErrorCode::kIo)

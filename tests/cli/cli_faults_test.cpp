@@ -7,8 +7,10 @@
 
 #include <algorithm>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 
+#include "cli_map_edits.h"
 #include "cli_scratch.h"
 #include "placedb/storage/map_store.h"
 #include "placedb/storage/migrations.h"
@@ -18,59 +20,6 @@ namespace placedb::testing {
 namespace {
 
 namespace fs = std::filesystem;
-
-void sqlExec(const fs::path& map, const std::string& sql) {
-  sqlite3* db = nullptr;
-  ASSERT_EQ(sqlite3_open(map.c_str(), &db), SQLITE_OK);
-  char* error = nullptr;
-  EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &error), SQLITE_OK)
-      << (error ? error : "");
-  sqlite3_free(error);
-  sqlite3_close(db);
-}
-
-// The pages of table or index `name` that hold rows (leaf pages), from SQLite's dbstat.
-std::vector<std::int64_t> leafPages(const fs::path& map, const std::string& name) {
-  sqlite3* db = nullptr;
-  std::vector<std::int64_t> pages;
-  if (sqlite3_open_v2(map.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) return pages;
-  sqlite3_stmt* s = nullptr;
-  if (sqlite3_prepare_v2(db, "SELECT pageno FROM dbstat WHERE name = ?1 AND pagetype = 'leaf'", -1,
-                         &s, nullptr) == SQLITE_OK) {
-    sqlite3_bind_text(s, 1, name.c_str(), -1, SQLITE_TRANSIENT);
-    while (sqlite3_step(s) == SQLITE_ROW) pages.push_back(sqlite3_column_int64(s, 0));
-  }
-  sqlite3_finalize(s);
-  sqlite3_close(db);
-  return pages;
-}
-
-// "ok" when SQLite's full integrity check finds nothing wrong, else its first finding.
-std::string integrityCheck(const fs::path& map) {
-  sqlite3* db = nullptr;
-  std::string finding = "cannot open";
-  if (sqlite3_open_v2(map.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
-    sqlite3_stmt* s = nullptr;
-    if (sqlite3_prepare_v2(db, "PRAGMA integrity_check(1)", -1, &s, nullptr) == SQLITE_OK &&
-        sqlite3_step(s) == SQLITE_ROW)
-      finding = reinterpret_cast<const char*>(sqlite3_column_text(s, 0));
-    else
-      finding = sqlite3_errmsg(db);
-    sqlite3_finalize(s);
-  }
-  sqlite3_close(db);
-  return finding;
-}
-
-fs::path mappedCopy(const fs::path& seq, const fs::path& dir, const std::string& name,
-                    const std::vector<std::string>& extra = {}) {
-  auto map = dir / name;
-  std::vector<std::string> args = {"map", map.string(), (seq / "frames.txt").string(), "-q"};
-  args.insert(args.end(), extra.begin(), extra.end());
-  auto r = placedb(args, dir);
-  EXPECT_EQ(r.exit_code, 0) << describe(r);
-  return map;
-}
 
 TEST(CliFaults, SecondNameForTheMapIsRefusedOrResolved) {
   auto seq = smallSequence(8);
@@ -132,29 +81,57 @@ TEST(CliFaults, DamagedPagesAreRefusedBeforeAnyWrite) {
   }
 }
 
-// Values SQLite cannot judge: the engine's own state, damaged in ways no page check sees. Each is
+// A value its CHECK constraint forbids (written with the constraints switched off): SQLite's
+// quick_check names it only on a connection that could write, so that is where the map looks.
+TEST(CliFaults, CheckConstraintViolationIsRefusedBeforeAnyWrite) {
+  auto seq = smallSequence(8);
+  auto dir = scratchDir("CliFaults_check_constraint");
+  auto map = mappedCopy(seq, dir, "m.placedb", {"--stop-after", "5"});
+  sqlExec(map,
+          "PRAGMA ignore_check_constraints = 1; "
+          "UPDATE locations SET tier = 7 WHERE id = (SELECT min(id) FROM locations)");
+  const std::string before = bytesOf(map);
+  auto r = placedb({"map", map.string(), (seq / "frames.txt").string(), "-q"}, dir);
+  EXPECT_EQ(r.exit_code, 4) << describe(r);
+  EXPECT_NE(r.err.find(map.string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("CHECK constraint failed in locations"), std::string::npos) << r.err;
+  EXPECT_TRUE(bytesOf(map) == before);
+}
+
+// Values SQLite cannot judge: the engine's own state, wrong in ways no page check sees. Each is
 // refused before any write (exit 4, naming the map and what is wrong), the map byte-identical.
+// The counters are rewritten through MapStore, with a valid checksum, so the value checks are
+// what refuses them (an edit by SQL alone fails its checksum first: RowChecksums covers that).
 TEST(CliFaults, DamagedEngineValuesAreRefusedBeforeAnyWrite) {
   auto seq = smallSequence(12);
   auto dir = scratchDir("CliFaults_values");
   auto good = mappedCopy(seq, dir, "good.placedb", {"--stop-after", "8"});
-  const std::vector<std::pair<std::string, std::string>> damage = {
-      {"UPDATE engine_state SET value = json_set(value, '$.next_location_id', -5) "
-       "WHERE key = 'engine.counters'",
-       "next_location_id"},
-      {"UPDATE engine_state SET value = json_set(value, '$.next_frame_id', 0) "
-       "WHERE key = 'engine.counters'",
-       "next_frame_id"},
-      {"UPDATE locations SET weight = -3 WHERE id = (SELECT min(id) FROM locations)", "weight"},
-      {"UPDATE filter_posterior SET probability = -1e999 "
-       "WHERE location_id = (SELECT min(location_id) FROM filter_posterior)",
+  const auto setCounter = [](const fs::path& map, const char* name, long long value) {
+    storage::MapStore store(map.string(), storage::OpenMode::kReadWrite);
+    auto counters = nlohmann::json::parse(*store.getStateText("engine.counters"));
+    counters[name] = value;
+    store.putState("engine.counters", counters.dump());
+  };
+  const std::vector<std::pair<std::function<void(const fs::path&)>, std::string>> damage = {
+      {[&](const fs::path& map) { setCounter(map, "next_location_id", -5); }, "next_location_id"},
+      {[&](const fs::path& map) { setCounter(map, "next_frame_id", 0); }, "next_frame_id"},
+      {[](const fs::path& map) {
+         sqlExec(map,
+                 "UPDATE locations SET weight = -3 WHERE id = (SELECT min(id) FROM locations)");
+       },
+       "weight"},
+      {[](const fs::path& map) {
+         sqlExec(map,
+                 "UPDATE filter_posterior SET probability = -1e999 "
+                 "WHERE location_id = (SELECT min(location_id) FROM filter_posterior)");
+       },
        "posterior"},
   };
   int n = 0;
-  for (const auto& [sql, names] : damage) {
+  for (const auto& [apply, names] : damage) {
     auto map = dir / ("v" + std::to_string(n++) + ".placedb");
     fs::copy_file(good, map, fs::copy_options::overwrite_existing);
-    sqlExec(map, sql);
+    apply(map);
     const std::string before = bytesOf(map);
     auto r = placedb({"map", map.string(), (seq / "frames.txt").string(), "-q"}, dir);
     EXPECT_EQ(r.exit_code, 4) << names << ": " << describe(r);

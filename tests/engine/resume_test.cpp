@@ -188,6 +188,9 @@ void downgradeToSchemaTwo(const std::string& path) {
   for (const char* column : {"pose_qw", "pose_qx", "pose_qy", "pose_qz", "pose_tx", "pose_ty",
                              "pose_tz", "pose_inliers"})
     exec(std::string("ALTER TABLE hypotheses DROP COLUMN ") + column);
+  exec("ALTER TABLE words DROP COLUMN checksum");  // schema 8
+  exec("ALTER TABLE engine_state DROP COLUMN checksum");
+  exec("DELETE FROM engine_state WHERE key = 'storage.kd_nodes.rows'");
   exec("PRAGMA user_version = 2");
   exec("COMMIT");
   sqlite3_close(db);

@@ -20,37 +20,7 @@ namespace {
 using testing::readBytes;
 using testing::writeBytes;
 
-// Raw access for setting up files the way other programs would.
-class RawDb {
- public:
-  explicit RawDb(const std::string& path) {
-    EXPECT_EQ(sqlite3_open(path.c_str(), &db_), SQLITE_OK);
-  }
-  ~RawDb() { sqlite3_close(db_); }
-  void exec(const std::string& sql) {
-    char* error = nullptr;
-    ASSERT_EQ(sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, &error), SQLITE_OK)
-        << (error ? error : "") << " in " << sql;
-  }
-  std::vector<std::string> rows(const std::string& sql) {
-    sqlite3_stmt* stmt = nullptr;
-    EXPECT_EQ(sqlite3_prepare_v2(db_, sql.c_str(), -1, &stmt, nullptr), SQLITE_OK) << sql;
-    std::vector<std::string> result;
-    while (sqlite3_step(stmt) == SQLITE_ROW) {
-      std::string row;
-      for (int i = 0; i < sqlite3_column_count(stmt); ++i) {
-        const auto* text = sqlite3_column_text(stmt, i);
-        row += (i ? "|" : "") + std::string(text ? reinterpret_cast<const char*>(text) : "NULL");
-      }
-      result.push_back(row);
-    }
-    sqlite3_finalize(stmt);
-    return result;
-  }
-
- private:
-  sqlite3* db_ = nullptr;
-};
+using testing::RawDb;
 
 // sqlite_master text without comments and layout, so equal schemas compare equal.
 std::string normaliseSql(const std::string& sql) {
@@ -292,7 +262,7 @@ TEST(Migrations, SixToSevenAddsNullPoseColumns) {
   }
   {
     MapStore store(path, OpenMode::kReadWrite);
-    ASSERT_EQ(store.schemaVersion(), 7);
+    ASSERT_EQ(store.schemaVersion(), MapStore::currentSchemaVersion());
     auto old = store.hypothesis(1);
     ASSERT_TRUE(old);
     EXPECT_TRUE(old->accepted);

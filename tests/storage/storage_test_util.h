@@ -1,5 +1,9 @@
 #pragma once
 // Helpers shared by the storage tests.
+#include <sqlite3.h>
+
+#include <gtest/gtest.h>
+
 #include <string>
 #include <vector>
 
@@ -10,6 +14,38 @@ namespace placedb::storage::testing {
 
 using placedb::testing::readBytes;
 using placedb::testing::writeBytes;
+
+// Raw access for setting up files the way other programs would.
+class RawDb {
+ public:
+  explicit RawDb(const std::string& path) {
+    EXPECT_EQ(sqlite3_open(path.c_str(), &db_), SQLITE_OK);
+  }
+  ~RawDb() { sqlite3_close(db_); }
+  void exec(const std::string& sql) {
+    char* error = nullptr;
+    ASSERT_EQ(sqlite3_exec(db_, sql.c_str(), nullptr, nullptr, &error), SQLITE_OK)
+        << (error ? error : "") << " in " << sql;
+  }
+  std::vector<std::string> rows(const std::string& sql) {
+    sqlite3_stmt* stmt = nullptr;
+    EXPECT_EQ(sqlite3_prepare_v2(db_, sql.c_str(), -1, &stmt, nullptr), SQLITE_OK) << sql;
+    std::vector<std::string> result;
+    while (sqlite3_step(stmt) == SQLITE_ROW) {
+      std::string row;
+      for (int i = 0; i < sqlite3_column_count(stmt); ++i) {
+        const auto* text = sqlite3_column_text(stmt, i);
+        row += (i ? "|" : "") + std::string(text ? reinterpret_cast<const char*>(text) : "NULL");
+      }
+      result.push_back(row);
+    }
+    sqlite3_finalize(stmt);
+    return result;
+  }
+
+ private:
+  sqlite3* db_ = nullptr;
+};
 
 // Writes one complete frame (frame row, location, words, references) in one transaction.
 inline void writeFrame(MapStore& store, std::int64_t session_id, std::int64_t index,

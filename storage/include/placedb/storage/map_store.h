@@ -206,6 +206,8 @@ class MapStore {
  private:
   class WriteScope;
   void requireWritable() const;
+  // kd_nodes' row count as the map recorded it (engine_state); refuses the map when damaged.
+  std::int64_t storedKdNodeRows() const;
 
   std::string path_;
   bool read_only_;

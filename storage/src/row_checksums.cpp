@@ -1,0 +1,160 @@
+#include "row_checksums.h"
+
+// Boost.CRC instead of a hand-written table: Boost is already a dependency (Serialization), and
+// its crc_optimal is the reference implementation the CRC-32C parameters below come from.
+#include <boost/crc.hpp>
+
+#include <cstring>
+#include <vector>
+
+#include "database.h"
+
+namespace placedb::storage::detail {
+namespace {
+
+// CRC-32C (Castagnoli): the polynomial LevelDB, RocksDB and iSCSI use.
+using Crc32c = boost::crc_optimal<32, 0x1EDC6F41, 0xFFFFFFFF, 0xFFFFFFFF, true, true>;
+
+// Integers are summed as 8 little-endian bytes, so a sum does not depend on the host.
+void addInt(Crc32c& crc, std::int64_t value) {
+  unsigned char bytes[8];
+  const auto u = static_cast<std::uint64_t>(value);
+  for (int i = 0; i < 8; ++i) bytes[i] = static_cast<unsigned char>(u >> (8 * i));
+  crc.process_bytes(bytes, sizeof bytes);
+}
+
+void addDouble(Crc32c& crc, double value) {
+  std::int64_t bits = 0;
+  std::memcpy(&bits, &value, sizeof bits);
+  addInt(crc, bits);
+}
+
+}  // namespace
+
+std::uint32_t wordChecksum(std::int64_t id, std::optional<std::int64_t> created_frame,
+                           std::int64_t descriptor_type, std::int64_t dim,
+                           const std::uint8_t* descriptor, std::size_t size) {
+  Crc32c crc;
+  addInt(crc, id);
+  addInt(crc, created_frame.value_or(-1));
+  addInt(crc, descriptor_type);
+  addInt(crc, dim);
+  if (size) crc.process_bytes(descriptor, size);
+  return crc.checksum();
+}
+
+std::uint32_t placeCodeChecksum(std::int64_t location_id, const void* code, std::size_t size) {
+  Crc32c crc;
+  addInt(crc, location_id);
+  if (size) crc.process_bytes(code, size);
+  return crc.checksum();
+}
+
+std::uint32_t stateChecksum(const std::string& key, const void* value, std::size_t size) {
+  Crc32c crc;
+  addInt(crc, static_cast<std::int64_t>(key.size()));
+  crc.process_bytes(key.data(), key.size());
+  if (size) crc.process_bytes(value, size);
+  return crc.checksum();
+}
+
+std::uint32_t kdNodeChecksum(std::int64_t tree, std::int64_t node, std::int64_t left,
+                             std::int64_t right, std::int64_t split_dim, double split_value) {
+  Crc32c crc;
+  addInt(crc, tree);
+  addInt(crc, node);
+  addInt(crc, left);
+  addInt(crc, right);
+  addInt(crc, split_dim);
+  addDouble(crc, split_value);
+  return crc.checksum();
+}
+
+bool checksumMatches(const Statement& row, int column, std::uint32_t computed) {
+  return !row.isNull(column) && row.columnInt(column) == std::int64_t{computed};
+}
+
+void refuseDamagedRow(const std::string& path, const std::string& table, const std::string& row,
+                      const std::string& what) {
+  throw StorageError(ErrorCode::kMapRefused,
+                     "map " + path + " damaged: " + table + " row " + row + " " + what +
+                         "; nothing was written (placedb check lists every damaged row)");
+}
+
+void fillChecksums(Database& db) {
+  // Sums are gathered first and written after each scan, so no table is changed under a read.
+  std::vector<std::pair<std::int64_t, std::int64_t>> by_id;
+  {
+    Statement read(db.handle(),
+                   "SELECT id, created_frame, descriptor_type, dim, descriptor FROM words");
+    while (read.step()) {
+      const auto [data, size] = read.columnBlobView(4);
+      by_id.emplace_back(read.columnInt(0),
+                         wordChecksum(read.columnInt(0), read.columnOptionalInt(1),
+                                      read.columnInt(2), read.columnInt(3), data, size));
+    }
+    Statement write(db.handle(), "UPDATE words SET checksum = ?2 WHERE id = ?1");
+    for (const auto& [id, sum] : by_id) {
+      write.bind(1, id);
+      write.bind(2, sum);
+      write.run();
+    }
+  }
+  by_id.clear();
+  {
+    Statement read(db.handle(), "SELECT location_id, code FROM place_codes");
+    while (read.step()) {
+      const auto [data, size] = read.columnBlobView(1);
+      by_id.emplace_back(read.columnInt(0), placeCodeChecksum(read.columnInt(0), data, size));
+    }
+    Statement write(db.handle(), "UPDATE place_codes SET checksum = ?2 WHERE location_id = ?1");
+    for (const auto& [id, sum] : by_id) {
+      write.bind(1, id);
+      write.bind(2, sum);
+      write.run();
+    }
+  }
+  {
+    std::vector<std::pair<std::string, std::int64_t>> by_key;
+    Statement read(db.handle(), "SELECT key, value FROM engine_state");
+    while (read.step()) {
+      const std::string key = read.columnText(0);
+      const auto [data, size] = read.columnBlobView(1);
+      by_key.emplace_back(key, stateChecksum(key, data, size));
+    }
+    Statement write(db.handle(), "UPDATE engine_state SET checksum = ?2 WHERE key = ?1");
+    for (const auto& [key, sum] : by_key) {
+      write.bind(1, key);
+      write.bind(2, sum);
+      write.run();
+    }
+  }
+  {
+    struct Row {
+      std::int64_t tree, node, sum;
+    };
+    std::vector<Row> rows;
+    Statement read(db.handle(),
+                   "SELECT tree, node, left_child, right_child, split_dim, split_value "
+                   "FROM kd_nodes");
+    while (read.step())
+      rows.push_back({read.columnInt(0), read.columnInt(1),
+                      kdNodeChecksum(read.columnInt(0), read.columnInt(1), read.columnInt(2),
+                                     read.columnInt(3), read.columnInt(4), read.columnDouble(5))});
+    Statement write(db.handle(), "UPDATE kd_nodes SET checksum = ?3 WHERE tree = ?1 AND node = ?2");
+    for (const Row& r : rows) {
+      write.bind(1, r.tree);
+      write.bind(2, r.node);
+      write.bind(3, r.sum);
+      write.run();
+    }
+  }
+  const std::string rows = std::to_string(db.queryInt("SELECT count(*) FROM kd_nodes"));
+  Statement put(db.handle(), "INSERT INTO engine_state (key, value, checksum) VALUES (?1, ?2, ?3)");
+  put.bind(1, std::string(kKdNodeRowsKey));
+  put.bind(2, rows);
+  put.bind(3, std::int64_t{stateChecksum(kKdNodeRowsKey, rows.data(), rows.size())});
+  put.run();
+}
+
+}  // namespace placedb::storage::detail
