@@ -12,6 +12,7 @@ add_custom_command(
 
 target_sources(placedb_storage PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/database.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/map_check.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_file_check.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_files.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/migrations.cpp

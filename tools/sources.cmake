@@ -23,6 +23,7 @@ add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_query.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_info.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_check.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_vocab.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_eval.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_demo.cpp

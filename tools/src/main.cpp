@@ -52,7 +52,7 @@ int run(int argc, char** argv) {
       placedb::cli::addInfoCommand(app),     placedb::cli::addVocabCommand(app),
       placedb::cli::addEvalCommand(app),     placedb::cli::addDemoCommand(app),
       placedb::cli::addSettingsCommand(app), placedb::cli::addExportCommand(app),
-      placedb::cli::addReportCommand(app)};
+      placedb::cli::addReportCommand(app),   placedb::cli::addCheckCommand(app)};
 
   try {
     app.parse(argc, argv);
