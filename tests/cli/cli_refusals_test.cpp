@@ -177,6 +177,44 @@ TEST(CliRefusals, RefusedRunsCreateAndChangeNothing) {
   EXPECT_TRUE(bytesOf(map) == before);
 }
 
+// Values that parse but mean nothing, and bytes that would cut the error line that quotes them.
+TEST(CliRefusals, NonsenseIntrinsicsAndNulBytesAreNamedRefusals) {
+  auto seq = smallSequence(4);
+  auto dir = scratchDir("CliRefusals_nonsense");
+  auto source = (seq / "frames.txt").string();
+  auto fresh = (dir / "fresh.placedb").string();
+  expectCleanError(placedb({"map", fresh, source, "--set", "fx=1e-300", "--set", "fy=190", "--set",
+                            "cx=120", "--set", "cy=90"},
+                           dir),
+                   2, "at least 1");
+  std::ofstream(dir / "camera.json")
+      << "{\"camera_matrix\": {\"type_id\": \"opencv-matrix\", \"rows\": 3, \"cols\": 3, "
+         "\"dt\": \"d\", \"data\": [1e400, 0, 120, 0, 190, 90, 0, 0, 1]}}\n";
+  expectCleanError(
+      placedb({"map", fresh, source, "--calibration", (dir / "camera.json").string()}, dir), 2,
+      "camera.json");
+  {
+    std::ofstream conf(dir / "nul.conf", std::ios::binary);
+    conf << "t_loop = 0.1\nwm_max = 3";
+    conf.put('\0');
+    conf << "00\n";
+  }
+  const auto r = placedb({"map", fresh, source, "--config", (dir / "nul.conf").string()}, dir);
+  expectCleanError(r, 2, "nul.conf line 2: holds a NUL byte");
+  EXPECT_FALSE(fs::exists(fresh));
+}
+
+// A full device as an export's output: the disk-full code, and the device is left a device.
+TEST(CliRefusals, ExportOntoAFullDeviceIsDiskFull) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  auto seq = smallSequence(4);
+  auto dir = scratchDir("CliRefusals_dev_full");
+  auto map = (dir / "m.placedb").string();
+  ASSERT_EQ(placedb({"map", map, (seq / "frames.txt").string(), "-q"}, dir).exit_code, 0);
+  expectCleanError(placedb({"export", map, "/dev/full", "--format", "g2o"}, dir), 7, "/dev/full");
+  EXPECT_TRUE(fs::is_character_file("/dev/full"));
+}
+
 TEST(CliRefusals, LogOfAnotherRunOrFormatIsRefused) {
   auto seq = smallSequence(6);
   auto dir = scratchDir("CliRefusals_log");

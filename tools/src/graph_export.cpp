@@ -4,12 +4,12 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <tuple>
 
 #include "placedb/error.h"
 #include "placedb/storage/map_store.h"
+#include "text_file.h"
 
 namespace placedb::cli {
 namespace {
@@ -79,33 +79,22 @@ std::string scoreText(const GraphLink& link) {
   return link.score ? fmt::format("{}", *link.score) : std::string();
 }
 
-std::ofstream openOutput(const std::filesystem::path& path) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) throw Error(ErrorCode::kIo, fmt::format("cannot write {}", path.string()));
-  return out;
-}
-
-void finish(std::ofstream& out, const std::filesystem::path& path) {
-  out.flush();
-  if (!out) throw Error(ErrorCode::kIo, fmt::format("cannot write {}", path.string()));
-}
-
 void writeCsv(const MapGraph& graph, const std::filesystem::path& folder) {
   std::error_code ec;
   std::filesystem::create_directories(folder, ec);
   if (ec)
     throw Error(ErrorCode::kIo, fmt::format("cannot create {}: {}", folder.string(), ec.message()));
   const auto locations_path = folder / "locations.csv";
-  auto locations = openOutput(locations_path);
-  locations << "location,session,tier,weight,frames\n";
+  std::string locations;
+  locations += "location,session,tier,weight,frames\n";
   for (const auto& l : graph.locations)
-    locations << fmt::format("{},{},{},{},{}\n", l.id, l.session_id, l.tier, l.weight,
-                             framesText(l));
-  finish(locations, locations_path);
+    locations +=
+        fmt::format("{},{},{},{},{}\n", l.id, l.session_id, l.tier, l.weight, framesText(l));
+  writeTextFile(locations_path, locations);
 
   const auto links_path = folder / "links.csv";
-  auto links = openOutput(links_path);
-  links << "location_a,location_b,type,score,appearance_only,qx,qy,qz,qw,tx,ty,tz,pose_inliers\n";
+  std::string links;
+  links += "location_a,location_b,type,score,appearance_only,qx,qy,qz,qw,tx,ty,tz,pose_inliers\n";
   for (const auto& k : graph.links) {
     std::string pose = ",,,,,,,";
     if (k.pose) {
@@ -115,32 +104,34 @@ void writeCsv(const MapGraph& graph, const std::filesystem::path& folder) {
                          k.pose->inliers);
     }
     const bool closure = k.type == "loop_closure";
-    links << fmt::format("{},{},{},{},{},{}\n", k.location_a, k.location_b, k.type, scoreText(k),
+    links += fmt::format("{},{},{},{},{},{}\n", k.location_a, k.location_b, k.type, scoreText(k),
                          closure && !k.pose ? 1 : 0, pose);
   }
-  finish(links, links_path);
+  writeTextFile(links_path, links);
 }
 
 void writeGraphml(const MapGraph& graph, const std::filesystem::path& path) {
-  auto out = openOutput(path);
-  out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-         "<graphml xmlns=\"http://graphml.graphdrawing.org/xmlns\">\n"
-         "  <key id=\"session\" for=\"node\" attr.name=\"session\" attr.type=\"long\"/>\n"
-         "  <key id=\"tier\" for=\"node\" attr.name=\"tier\" attr.type=\"string\"/>\n"
-         "  <key id=\"weight\" for=\"node\" attr.name=\"weight\" attr.type=\"long\"/>\n"
-         "  <key id=\"frames\" for=\"node\" attr.name=\"frames\" attr.type=\"string\"/>\n"
-         "  <key id=\"type\" for=\"edge\" attr.name=\"type\" attr.type=\"string\"/>\n"
-         "  <key id=\"score\" for=\"edge\" attr.name=\"score\" attr.type=\"double\"/>\n"
-         "  <key id=\"appearance_only\" for=\"edge\" attr.name=\"appearance_only\" "
-         "attr.type=\"boolean\"/>\n";
+  std::string out;
+  out +=
+      "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+      "<graphml xmlns=\"http://graphml.graphdrawing.org/xmlns\">\n"
+      "  <key id=\"session\" for=\"node\" attr.name=\"session\" attr.type=\"long\"/>\n"
+      "  <key id=\"tier\" for=\"node\" attr.name=\"tier\" attr.type=\"string\"/>\n"
+      "  <key id=\"weight\" for=\"node\" attr.name=\"weight\" attr.type=\"long\"/>\n"
+      "  <key id=\"frames\" for=\"node\" attr.name=\"frames\" attr.type=\"string\"/>\n"
+      "  <key id=\"type\" for=\"edge\" attr.name=\"type\" attr.type=\"string\"/>\n"
+      "  <key id=\"score\" for=\"edge\" attr.name=\"score\" attr.type=\"double\"/>\n"
+      "  <key id=\"appearance_only\" for=\"edge\" attr.name=\"appearance_only\" "
+      "attr.type=\"boolean\"/>\n";
   for (const char* key : {"qx", "qy", "qz", "qw", "tx", "ty", "tz"})
-    out << fmt::format("  <key id=\"{0}\" for=\"edge\" attr.name=\"{0}\" attr.type=\"double\"/>\n",
+    out += fmt::format("  <key id=\"{0}\" for=\"edge\" attr.name=\"{0}\" attr.type=\"double\"/>\n",
                        key);
-  out << "  <key id=\"pose_inliers\" for=\"edge\" attr.name=\"pose_inliers\" "
-         "attr.type=\"long\"/>\n"
-         "  <graph id=\"placedb\" edgedefault=\"undirected\">\n";
+  out +=
+      "  <key id=\"pose_inliers\" for=\"edge\" attr.name=\"pose_inliers\" "
+      "attr.type=\"long\"/>\n"
+      "  <graph id=\"placedb\" edgedefault=\"undirected\">\n";
   for (const auto& l : graph.locations)
-    out << fmt::format(
+    out += fmt::format(
         "    <node id=\"n{}\"><data key=\"session\">{}</data><data key=\"tier\">{}</data>"
         "<data key=\"weight\">{}</data><data key=\"frames\">{}</data></node>\n",
         l.id, l.session_id, l.tier, l.weight, framesText(l));
@@ -158,20 +149,21 @@ void writeGraphml(const MapGraph& graph, const std::filesystem::path& path) {
         data += fmt::format("<data key=\"{}\">{}</data>", keys[i], values[i]);
       data += fmt::format("<data key=\"pose_inliers\">{}</data>", k.pose->inliers);
     }
-    out << fmt::format("    <edge source=\"n{}\" target=\"n{}\">{}</edge>\n", k.location_a,
+    out += fmt::format("    <edge source=\"n{}\" target=\"n{}\">{}</edge>\n", k.location_a,
                        k.location_b, data);
   }
-  out << "  </graph>\n</graphml>\n";
-  finish(out, path);
+  out += "  </graph>\n</graphml>\n";
+  writeTextFile(path, out);
 }
 
 void writeG2o(const MapGraph& graph, const std::filesystem::path& path) {
-  auto out = openOutput(path);
-  out << "# placedb map graph: locations at the origin (no poses are stored); links in\n"
-         "# odometry order, then loop closures. Replace the odometry edges with measured ones.\n"
-         "# A closure with a pose: unit translation direction, zero translation information.\n";
+  std::string out;
+  out +=
+      "# placedb map graph: locations at the origin (no poses are stored); links in\n"
+      "# odometry order, then loop closures. Replace the odometry edges with measured ones.\n"
+      "# A closure with a pose: unit translation direction, zero translation information.\n";
   for (const auto& l : graph.locations)
-    out << fmt::format("VERTEX_SE3:QUAT {} 0 0 0 0 0 0 1\n", l.id);
+    out += fmt::format("VERTEX_SE3:QUAT {} 0 0 0 0 0 0 1\n", l.id);
   // Upper triangle of the 6 x 6 information matrix row by row (x y z, then rotation): unit,
   // or for a measured closure zero on the translation, whose scale one camera cannot measure.
   const std::string information = "1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1";
@@ -181,19 +173,19 @@ void writeG2o(const MapGraph& graph, const std::filesystem::path& path) {
       if (k.type != type) continue;
       RelativePose pose = k.pose.value_or(RelativePose{});
       if (k.type == "loop_closure" && !k.pose)
-        out << fmt::format("# placedb appearance-only {} {} score {}\n", k.location_a, k.location_b,
+        out += fmt::format("# placedb appearance-only {} {} score {}\n", k.location_a, k.location_b,
                            scoreText(k));
       if (k.pose)
-        out << fmt::format("# placedb pose {} {} inliers {} score {}\n", k.location_a, k.location_b,
+        out += fmt::format("# placedb pose {} {} inliers {} score {}\n", k.location_a, k.location_b,
                            k.pose->inliers, scoreText(k));
       const auto& t = pose.translation_direction;
       const auto& q = pose.rotation_xyzw;
-      out << fmt::format("EDGE_SE3:QUAT {} {} {} {} {} {} {} {} {} {}\n", k.location_a,
+      out += fmt::format("EDGE_SE3:QUAT {} {} {} {} {} {} {} {} {} {}\n", k.location_a,
                          k.location_b, t[0], t[1], t[2], q[0], q[1], q[2], q[3],
                          k.pose ? rotation_only : information);
     }
   }
-  finish(out, path);
+  writeTextFile(path, out);
 }
 
 }  // namespace

@@ -21,6 +21,7 @@
 #include "placedb/error.h"
 #include "placedb/storage/map_store.h"
 #include "report_page.h"
+#include "text_file.h"
 
 namespace placedb::cli {
 namespace fs = std::filesystem;
@@ -129,26 +130,6 @@ std::optional<std::int64_t> sessionOfLog(const fs::path& log) {
   const long long id = std::strtoll(cell.c_str(), &end, 10);
   if (cell.empty() || *end != '\0') return std::nullopt;
   return id;
-}
-
-// The file is written beside its final name and renamed when whole: a reader (or a full disk)
-// never sees half a page.
-void writeWhole(const fs::path& target, const std::string& text) {
-  const fs::path partial = target.string() + fmt::format(".partial-{}", ::getpid());
-  auto fail = [&](int error) {
-    std::error_code ec;
-    fs::remove(partial, ec);
-    const bool full = error == ENOSPC || error == EFBIG || error == EDQUOT;
-    throw Error(full ? ErrorCode::kDiskFull : ErrorCode::kIo,
-                fmt::format("cannot write {}: {}", target.string(), std::strerror(error)));
-  };
-  std::FILE* file = std::fopen(partial.c_str(), "wb");
-  if (!file) fail(errno);
-  const bool written =
-      std::fwrite(text.data(), 1, text.size(), file) == text.size() && std::fflush(file) == 0;
-  const int error = errno;
-  if (std::fclose(file) != 0 || !written) fail(written ? errno : error);
-  if (std::rename(partial.c_str(), target.c_str()) != 0) fail(errno);
 }
 
 }  // namespace
@@ -293,7 +274,7 @@ ReportSummary writeReport(const ReportRequest& request) {
     throw Error(ErrorCode::kIo,
                 fmt::format("cannot create {}: {}", request.out.string(), ec.message()));
   summary.page = request.out / "index.html";
-  writeWhole(summary.page, reportHtml(page));
+  writeTextFile(summary.page, reportHtml(page));
   summary.figures = page.plots.size();
   summary.wrong_shown = page.wrong.size();
   summary.right_shown = page.right.size();

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cctype>
 #include <nlohmann/json.hpp>
 
@@ -26,6 +27,10 @@ Settings parseJsonConfig(const std::string& content, const std::string& name) {
   for (const auto& [key, value] : doc.items()) {
     if (trim(key).empty())
       throw Error(ErrorCode::kInvalidArgument, fmt::format("config {}: empty key", name));
+    if (key.find('\0') != std::string::npos ||
+        (value.is_string() && value.get<std::string>().find('\0') != std::string::npos))
+      throw Error(ErrorCode::kInvalidArgument,
+                  fmt::format("config {}: a key or value holds a NUL character (\\u0000)", name));
     if (value.is_string())
       settings[key] = value.get<std::string>();
     else if (value.is_number() || value.is_boolean())
@@ -79,6 +84,11 @@ Settings parseAssignments(const std::vector<std::string>& assignments) {
 Settings parseConfig(const std::string& text, const std::string& name) {
   const std::string content = withoutByteOrderMark(text);
   std::string head = trim(content);
+  // A NUL byte would end the error message that quotes its line, and no setting holds one.
+  if (const auto nul = content.find('\0'); nul != std::string::npos)
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("config {} line {}: holds a NUL byte (a binary file?)", name,
+                            1 + std::count(content.begin(), content.begin() + nul, '\n')));
   if (!head.empty() && head[0] == '{') return parseJsonConfig(content, name);
   return parseLineConfig(content, name);
 }

@@ -326,6 +326,14 @@ void Options::validate() const {
                 fmt::format("camera intrinsics need all four of fx fy cx cy or none (0 = unknown); "
                             "got fx={} fy={} cx={} cy={}",
                             fx, fy, cx, cy));
+  // Pixels are the unit: a focal length under one pixel makes one pixel span more than 45
+  // degrees, which no camera does (a typo's 1e-3 or a value in metres would give nonsense poses).
+  if (intrinsics == 4 && (fx < 1 || fy < 1))
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("fx and fy are focal lengths in pixels and must be at least 1 (a "
+                            "smaller one makes one pixel span more than 45 degrees); got fx={} "
+                            "fy={}",
+                            fx, fy));
   if (t_nd1 > t_nd2)
     throw Error(ErrorCode::kInvalidArgument,
                 fmt::format("t_nd1 ({}) must not exceed t_nd2 ({})", t_nd1, t_nd2));
