@@ -1,4 +1,4 @@
--- placedb map schema: the current version (8), as one file.
+-- placedb map schema: the current version (9), as one file.
 -- It must equal the result of applying migrations/0001..N in order; a test compares
 -- sqlite_master of both. `sqlite3 new.db < schema/schema.sql` makes an empty placedb map.
 -- See schema/SCHEMA.md for the meaning of every table, column and view.
@@ -43,6 +43,7 @@ CREATE TABLE frames (
   wm_size INTEGER,
   stm_size INTEGER,
   mean_quantisation_error REAL,
+  stamp_ns INTEGER,                  -- the source's time stamp, ns since the epoch (schema 9)
   UNIQUE (session_id, source_index)
 );
 CREATE INDEX frames_by_location ON frames (location_id);
@@ -177,7 +178,7 @@ SELECT f.id AS frame_id, f.session_id, f.source_index, f.source_path,
        CASE f.outcome WHEN 0 THEN 'new' WHEN 1 THEN 'merged' ELSE 'bad' END AS outcome,
        f.location_id, f.feature_count, f.words_created, f.vocabulary_size, f.wm_size, f.stm_size,
        f.mean_quantisation_error, f.features_ms, f.quantisation_ms, f.likelihood_ms, f.filter_ms,
-       f.memory_ms, f.storage_ms, f.total_ms
+       f.memory_ms, f.storage_ms, f.total_ms, f.stamp_ns
 FROM frames f;
 
 CREATE VIEW v_locations AS
@@ -252,5 +253,5 @@ INSERT INTO engine_state (key, value, checksum) VALUES ('storage.kd_nodes.rows',
 
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 8;
+PRAGMA user_version = 9;
 COMMIT;

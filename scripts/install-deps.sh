@@ -15,6 +15,9 @@ packages=(
   python3 python3-dev pybind11-dev python3-numpy python3-pytest
   clang-format
   chromium  # opens `placedb report` pages in the headless browser test (tests/tools)
+  # ROS 1 bags: the ROS project's reader and the headers its pluginlib include needs on Debian 12
+  librosbag-storage-dev libclass-loader-dev librcpputils-dev librcutils-dev libament-index-cpp-dev
+  python3-rosbag python3-sensor-msgs  # the tests write ROS 1 bags with ROS's own Python writer
 )
 if [[ "${1:-}" == "--fuzz" ]]; then
   packages+=(clang-14 libclang-rt-14-dev)

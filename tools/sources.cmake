@@ -8,6 +8,11 @@ add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/text_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/interrupt.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/image_source.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/image_message.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/bag_source.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/ros1_bag.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/ros2_bag.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/live_source.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/settings_input.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/calibration_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/frame_log.cpp
@@ -39,6 +44,31 @@ target_link_libraries(placedb_cli
          ${OpenCV_LIBS}
   PRIVATE placedb_engine_internal placedb_synthetic PkgConfig::PLPLOT placedb_build_flags
           placedb_version)
+
+# ROS 1 bags through the ROS project's reader (Debian's librosbag-storage-dev). Its headers
+# include pluginlib, which on Debian 12 comes from ROS 2 and needs four more header folders; its
+# CMake config needs ament's Python tools, so the pieces are found here one by one. Without them
+# placedb builds and a .bag source is a clear error.
+find_path(PLACEDB_ROSBAG_INCLUDE rosbag/bag.h)
+find_library(PLACEDB_ROSBAG_LIB rosbag_storage)
+set(PLACEDB_ROSBAG_HEADER_DIRS)
+foreach(dir pluginlib class_loader rcpputils rcutils ament_index_cpp)
+  if(EXISTS /usr/include/${dir})
+    list(APPEND PLACEDB_ROSBAG_HEADER_DIRS /usr/include/${dir})
+  endif()
+endforeach()
+list(LENGTH PLACEDB_ROSBAG_HEADER_DIRS PLACEDB_ROSBAG_HEADER_COUNT)
+if(PLACEDB_ROSBAG_INCLUDE AND PLACEDB_ROSBAG_LIB AND PLACEDB_ROSBAG_HEADER_COUNT EQUAL 5)
+  target_compile_definitions(placedb_cli PRIVATE PLACEDB_WITH_ROS1_BAGS)
+  target_include_directories(placedb_cli SYSTEM PRIVATE ${PLACEDB_ROSBAG_HEADER_DIRS})
+  target_link_libraries(placedb_cli PRIVATE rosbag_storage roscpp_serialization rostime
+                        cpp_common console_bridge)
+  set(PLACEDB_WITH_ROS1_BAGS ON CACHE INTERNAL "")
+  message(STATUS "ROS 1 bags: read with ${PLACEDB_ROSBAG_LIB}")
+else()
+  set(PLACEDB_WITH_ROS1_BAGS OFF CACHE INTERNAL "")
+  message(STATUS "ROS 1 bags: not read (install librosbag-storage-dev and its headers)")
+endif()
 
 add_executable(placedb ${CMAKE_CURRENT_LIST_DIR}/src/main.cpp)
 target_link_libraries(placedb PRIVATE placedb_cli placedb_build_flags placedb_version)

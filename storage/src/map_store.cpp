@@ -59,13 +59,14 @@ FrameRecord readFrame(const detail::Statement& s) {
                s.columnDouble(10), s.columnDouble(11), s.columnDouble(12)};
   f.stats = {s.columnInt(13), s.columnInt(14), s.columnInt(15),
              s.columnInt(16), s.columnInt(17), s.columnDouble(18)};
+  f.stamp_ns = s.columnOptionalInt(19);
   return f;
 }
 
 constexpr const char* kFrameColumns =
     "id, session_id, source_index, source_path, outcome, location_id, features_ms, "
     "quantisation_ms, likelihood_ms, filter_ms, memory_ms, storage_ms, total_ms, feature_count, "
-    "words_created, vocabulary_size, wm_size, stm_size, mean_quantisation_error";
+    "words_created, vocabulary_size, wm_size, stm_size, mean_quantisation_error, stamp_ns";
 
 SessionRecord readSession(const detail::Statement& s) {
   SessionRecord r;
@@ -338,7 +339,7 @@ std::int64_t MapStore::insertFrame(const FrameRecord& f) {
   WriteScope scope(*this);
   static const std::string insert = std::string("INSERT INTO frames (") + kFrameColumns +
                                     ") VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, "
-                                    "?13, ?14, ?15, ?16, ?17, ?18, ?19)";
+                                    "?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20)";
   auto s = db_->cached(insert.c_str());
   if (f.id != 0) s->bind(1, f.id);
   s->bind(2, f.session_id);
@@ -358,6 +359,7 @@ std::int64_t MapStore::insertFrame(const FrameRecord& f) {
     s->bind(index++, value);
   }
   s->bind(index, st.mean_quantisation_error);
+  s->bind(20, f.stamp_ns);
   s->run();
   const std::int64_t id = sqlite3_last_insert_rowid(db_->handle());
   scope.commit();

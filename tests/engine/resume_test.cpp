@@ -191,6 +191,14 @@ void downgradeToSchemaTwo(const std::string& path) {
   exec("ALTER TABLE words DROP COLUMN checksum");  // schema 8
   exec("ALTER TABLE engine_state DROP COLUMN checksum");
   exec("DELETE FROM engine_state WHERE key = 'storage.kd_nodes.rows'");
+  exec("DROP VIEW v_frames");  // schema 9
+  exec("ALTER TABLE frames DROP COLUMN stamp_ns");
+  exec(
+      "CREATE VIEW v_frames AS SELECT f.id AS frame_id, f.session_id, f.source_index, "
+      "f.source_path, CASE f.outcome WHEN 0 THEN 'new' WHEN 1 THEN 'merged' ELSE 'bad' END AS "
+      "outcome, f.location_id, f.feature_count, f.words_created, f.vocabulary_size, f.wm_size, "
+      "f.stm_size, f.mean_quantisation_error, f.features_ms, f.quantisation_ms, f.likelihood_ms, "
+      "f.filter_ms, f.memory_ms, f.storage_ms, f.total_ms FROM frames f");
   exec("PRAGMA user_version = 2");
   exec("COMMIT");
   sqlite3_close(db);

@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "live_source.h"
 #include "mapping_run.h"
 #include "settings_input.h"
 
@@ -34,7 +35,16 @@ Command addMapCommand(CLI::App& parent) {
       "Process every frame of SOURCE into MAP, detecting loop closures.\n\n"
       "SOURCE is an image folder (natural order: 2.jpg before 10.jpg; non-image files are\n"
       "skipped), a list file (one image path a line, relative to the list file; blank lines\n"
-      "and '#' comments ignored) or a video file (.mp4, .avi, .mkv, ...).\n\n"
+      "and '#' comments ignored), a video file (.mp4, .avi, .mkv, ...), or a ROS bag: a ROS 1\n"
+      "bag (.bag) or a ROS 2 bag (a folder with metadata.yaml and .db3 files, or one .db3\n"
+      "file). A bag's sensor_msgs/Image or CompressedImage topic is read (--topic names it;\n"
+      "the only image topic is the default) in mono8, mono16, bgr8, rgb8, bgra8, rgba8 or\n"
+      "compressed JPEG/PNG, and each message's header.stamp is kept with its frame\n"
+      "(frames.stamp_ns, the log's stamp_ns column). A bag resumes like a list file.\n"
+      "A camera (camera:N or /dev/videoN) or a stream (rtsp://, http://, https://) is read\n"
+      "live: each frame is the newest one, frames that arrive while the engine is busy are\n"
+      "dropped and counted (progress and the summary show them), --fps caps the rate, Ctrl-C\n"
+      "closes the session cleanly; a live source always starts a new session.\n\n"
       "MAP is created when missing. If its last session ran over the same SOURCE and did not\n"
       "reach its end (a crash, Ctrl-C or --stop-after), that session resumes with the first\n"
       "frame not yet processed; otherwise a new session starts. Frame numbers always count from\n"
@@ -50,7 +60,8 @@ Command addMapCommand(CLI::App& parent) {
       "posterior, words_created, vocabulary_size, wm_size, stm_size, mean_quantisation_error,\n"
       "feature_count, transferred, retrieved, per-stage times (features_ms ... storage_ms),\n"
       "session, other_candidates, rejected_reason, raw_score, inliers, matches,\n"
-      "verification_ms, candidates_checked. score is 0 where the ratio test or the geometric\n"
+      "verification_ms, candidates_checked, stamp_ns. score is 0 where the ratio test or the "
+      "geometric\n"
       "check rejected the hypothesis (raw_score keeps it); inliers/matches are the geometric\n"
       "check's, verification_ms its time (part of filter_ms) and candidates_checked the\n"
       "locations it examined. candidate_frames lists only frames of this\n"
@@ -59,9 +70,15 @@ Command addMapCommand(CLI::App& parent) {
       "Examples:\n"
       "  placedb map run.placedb /data/lip6_outdoor/frames.txt --log run.csv\n"
       "  placedb map run.placedb images/ --set t_loop=0.2 --set wm_max=300\n"
-      "  placedb map run.placedb walk.mp4 --preset paper --stop-after 500   # later: same again");
+      "  placedb map run.placedb walk.mp4 --preset paper --stop-after 500   # later: same again\n"
+      "  placedb map run.placedb run.bag --topic /camera/image_raw/compressed\n"
+      "  placedb map run.placedb camera:0 --fps 5          # Ctrl-C to stop");
   app->add_option("MAP", request->map_path, "map file (SQLite)")->required();
-  app->add_option("SOURCE", request->source, "image folder, list file or video")->required();
+  app->add_option("SOURCE", request->source, "image folder, list file, video or ROS bag")
+      ->required();
+  app->add_option("--topic", request->source_options.topic,
+                  "a bag's image topic (sensor_msgs/Image or CompressedImage); default: the "
+                  "bag's only image topic");
   app->add_option("--log", request->log_path,
                   "write (or append) the per-frame CSV log; - writes it to standard output");
   addSettingsOptions(*app, request->settings);
@@ -76,21 +93,28 @@ Command addMapCommand(CLI::App& parent) {
             return "must be a whole number >= 1, got " + value;
           },
           "N >= 1"));
+  app->add_option("--fps", request->source_options.max_fps,
+                  "a camera's or stream's rate cap, frames a second (default: as fast as the "
+                  "engine goes; frames arriving while it is busy are dropped and counted)")
+      ->check(CLI::PositiveNumber);
   app->add_flag("--new-session", request->new_session,
                 "start a new session even if the last one over SOURCE is unfinished");
   app->add_flag("--quiet,-q", request->quiet, "no progress output");
   return {app, [request, stop_after, app]() {
             if (app->count("--stop-after")) request->stop_after = *stop_after;
+            const bool live = isLiveSource(request->source);
             MappingSummary s = runMapping(*request);
             if (!request->quiet) {
-              std::string why = s.interrupted     ? "interrupted; run again to resume"
+              std::string why = s.interrupted     ? (live ? "interrupted; the session is closed"
+                                                          : "interrupted; run again to resume")
                                 : s.stopped_early ? "stopped by --stop-after; run again to resume"
                                                   : "end of source";
               std::fputs(fmt::format("placedb: session {}: {} frames ({} bad, {} of them "
-                                     "unreadable) in {:.1f} s, {} new locations, accepted loop "
+                                     "unreadable{}) in {:.1f} s, {} new locations, accepted loop "
                                      "closures {} ({})\n",
-                                     s.session_id, s.processed, s.bad, s.unreadable, s.seconds,
-                                     s.locations_created, s.loop_closures, why)
+                                     s.session_id, s.processed, s.bad, s.unreadable,
+                                     live ? fmt::format("; {} dropped while busy", s.dropped) : "",
+                                     s.seconds, s.locations_created, s.loop_closures, why)
                              .c_str(),
                          stderr);
             }

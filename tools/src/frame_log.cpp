@@ -74,7 +74,8 @@ const std::vector<std::string>& FrameLogWriter::columns() {
                                                     "inliers",
                                                     "matches",
                                                     "verification_ms",
-                                                    "candidates_checked"};
+                                                    "candidates_checked",
+                                                    "stamp_ns"};
   return kColumns;
 }
 
@@ -266,7 +267,8 @@ void FrameLogWriter::write(const FrameResult& r) {
                                      std::to_string(r.hypothesis.inliers),
                                      std::to_string(r.hypothesis.matches),
                                      millis(t.verification),
-                                     std::to_string(r.hypothesis.candidates_checked)};
+                                     std::to_string(r.hypothesis.candidates_checked),
+                                     r.stamp_ns ? std::to_string(*r.stamp_ns) : std::string()};
   if (fields.size() != columns().size())
     throw Error(ErrorCode::kInternal, "frame log: fields and columns differ");
   std::string row;

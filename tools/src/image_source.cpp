@@ -11,7 +11,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "bag_source.h"
 #include "features/image_conversion.h"
+#include "live_source.h"
 #include "placedb/error.h"
 #include "text_file.h"
 
@@ -76,18 +78,6 @@ class PathListSource : public ImageSource {
   std::int64_t next_ = 0;
 };
 
-// FFmpeg and OpenCV print their own lines about a file they cannot read (ten for a broken MP4,
-// also under --quiet); placedb's error names the file instead. OPENCV_FFMPEG_LOGLEVEL set by the
-// user is kept, for debugging a video.
-void quietVideoLibraries() {
-  static const bool done = [] {
-    ::setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0);  // AV_LOG_QUIET
-    cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
-    return true;
-  }();
-  (void)done;
-}
-
 class VideoSource : public ImageSource {
  public:
   explicit VideoSource(std::string canonical) : canonical_(std::move(canonical)) {
@@ -128,6 +118,16 @@ class VideoSource : public ImageSource {
 };
 
 }  // namespace
+
+// Ten lines for a broken MP4, also under --quiet.
+void quietVideoLibraries() {
+  static const bool done = [] {
+    ::setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0);  // AV_LOG_QUIET
+    cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
+    return true;
+  }();
+  (void)done;
+}
 
 bool naturalLess(const std::string& a, const std::string& b) {
   std::size_t i = 0, j = 0;
@@ -267,12 +267,28 @@ cv::Mat readImageFile(const std::string& path, std::string& problem) {
   return image;
 }
 
-std::unique_ptr<ImageSource> ImageSource::open(const std::string& source) {
+std::unique_ptr<ImageSource> ImageSource::open(const std::string& source,
+                                               const SourceOptions& options) {
+  const bool live = isLiveSource(source);
+  if (options.max_fps > 0 && !live)
+    throw Error(ErrorCode::kInvalidArgument,
+                fmt::format("--fps applies to cameras and streams; source {} is not one", source));
+  if (live) {
+    if (!options.topic.empty())
+      throw Error(ErrorCode::kInvalidArgument,
+                  fmt::format("--topic applies to ROS bags; source {} is a live one", source));
+    return openLiveSource(source, options.max_fps);
+  }
   fs::path path(source);
   std::error_code ec;
   if (!fs::exists(path, ec))
     throw Error(ErrorCode::kIo, fmt::format("source {} does not exist", source));
   std::string resolved = canonicalSource(path);
+  if (isBag(resolved)) return openBag(resolved, options.topic);
+  if (!options.topic.empty())
+    throw Error(
+        ErrorCode::kInvalidArgument,
+        fmt::format("--topic {} applies to ROS bags; source {} is not one", options.topic, source));
   if (fs::is_directory(resolved, ec)) {
     std::vector<std::string> images, skipped;
     listImageFolder(resolved, images, skipped);

@@ -1,5 +1,6 @@
 #pragma once
-// Where `placedb map` reads its frames from: an image folder, a list file or a video.
+// Where `placedb map` reads its frames from: an image folder, a list file, a video, a ROS bag
+// (bag_source.h) or a camera or stream (live_source.h).
 //
 // - Folder: the files whose extension OpenCV's imread knows, in natural order (2.jpg before
 //   10.jpg); other files are skipped and reported by skippedFiles().
@@ -21,32 +22,46 @@ namespace placedb::cli {
 
 struct SourceFrame {
   std::int64_t index = 0;
-  std::string path;     // the image file, or "<video>#<index>" for a video
-  cv::Mat image;        // empty when unreadable
-  std::string problem;  // why the image could not be read; empty when it was
+  std::string path;                      // the image file, or "<video>#<index>" for a video
+  cv::Mat image;                         // empty when unreadable
+  std::string problem;                   // why the image could not be read; empty when it was
+  std::optional<std::int64_t> stamp_ns;  // a bag message's header.stamp, ns since the epoch
+};
+
+struct SourceOptions {
+  std::string topic;   // a bag's image topic; empty: its only one (other sources: must be empty)
+  double max_fps = 0;  // a live source's rate cap; 0: as fast as frames are processed
 };
 
 class ImageSource {
  public:
-  // Throws placedb::Error(kIo) when the source is missing or cannot be opened.
-  static std::unique_ptr<ImageSource> open(const std::string& source);
+  // Throws placedb::Error(kIo) when the source is missing or cannot be opened, kInvalidArgument
+  // when an option does not apply to it.
+  static std::unique_ptr<ImageSource> open(const std::string& source,
+                                           const SourceOptions& options = {});
   virtual ~ImageSource() = default;
 
   // Canonical absolute path: resuming compares it with the session's stored source.
   virtual const std::string& canonicalPath() const = 0;
-  virtual std::string kind() const = 0;  // "folder", "list" or "video"
+  virtual std::string kind() const = 0;  // "folder", "list", "video", "bag" or "live"
   // Number of frames, when known (a video's count is the container's estimate).
   virtual std::optional<std::int64_t> size() const = 0;
   // The next frame read() returns is `index`.
   virtual void seek(std::int64_t index) = 0;
   // False at the end of the source.
   virtual bool read(SourceFrame& frame) = 0;
+  // Frames a live source dropped because they arrived while the engine was busy.
+  virtual std::int64_t dropped() const { return 0; }
   // Folder entries that are not images, skipped.
   virtual std::vector<std::string> skippedFiles() const { return {}; }
   // What the source holds, short: "paths:N:HASH" (FNV-1a 64 of the image paths in order) for a
   // folder or list, "bytes:N" for a video. Stored with a session; a resume checks it.
   virtual std::string digest() const = 0;
 };
+
+// FFmpeg and OpenCV print their own lines about a video or stream they cannot read; placedb's
+// error names the source instead (OPENCV_FFMPEG_LOGLEVEL set by the user is kept).
+void quietVideoLibraries();
 
 // Natural order: digit runs compare as numbers ("img2" < "img10"), the rest byte by byte.
 bool naturalLess(const std::string& a, const std::string& b);

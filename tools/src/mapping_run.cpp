@@ -35,7 +35,8 @@ struct ResumePoint {
 std::optional<std::int64_t> resumeIndex(const storage::SessionRecord& last,
                                         std::optional<std::int64_t> last_index,
                                         const ImageSource& source) {
-  if (!sameSource(last.source, source.canonicalPath())) return std::nullopt;
+  if (source.kind() == "live" || !sameSource(last.source, source.canonicalPath()))
+    return std::nullopt;  // a camera's frames are never the same twice
   const std::int64_t next = last_index ? *last_index + 1 : 0;
   if (last.clean_close) {
     // A source of unknown length cannot tell whether it was finished: treat it as finished.
@@ -115,7 +116,7 @@ MappingSummary runMapping(const MappingRequest& request) {
   // From here on Ctrl-C only raises a flag: the frame loop below acts on it.
   installInterruptHandlers();
   // Everything that can be refused is checked before the map file is touched.
-  auto source = ImageSource::open(request.source);
+  auto source = ImageSource::open(request.source, request.source_options);
   Options options = resolveOptions(request.settings);
   const ResumeDecision decision = sessionToResume(request.map_path, *source, request.new_session);
   std::optional<ResumePoint> resume = decision.resume;
@@ -201,10 +202,10 @@ MappingSummary runMapping(const MappingRequest& request) {
       if (progress) progress->clearLine();
       printWarning(fmt::format("frame {} ({}): {}; recorded as a bad frame", frame.index,
                                frame.path, frame.problem));
-      result = map->recordUnreadable(frame.index, frame.path);
+      result = map->recordUnreadable(frame.index, frame.path, frame.stamp_ns);
       ++summary.unreadable;
     } else {
-      result = map->process(frame.image, frame.index, frame.path);
+      result = map->process(frame.image, frame.index, frame.path, frame.stamp_ns);
     }
     ++summary.processed;
     if (result.outcome == FrameOutcome::kNewLocation) ++summary.locations_created;
@@ -218,9 +219,12 @@ MappingSummary runMapping(const MappingRequest& request) {
     }
     if (log) log->write(result);
     if (progress)
-      progress->update({frame.index, summary.locations_created,
-                        static_cast<std::int64_t>(result.wm_size), summary.loop_closures});
+      progress->update(
+          {frame.index, summary.locations_created, static_cast<std::int64_t>(result.wm_size),
+           summary.loop_closures,
+           source->kind() == "live" ? std::optional(source->dropped()) : std::nullopt});
   }
+  summary.dropped = source->dropped();
   map->close();
   if (progress) progress->finish();
   summary.seconds =

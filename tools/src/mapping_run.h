@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 
+#include "image_source.h"
 #include "settings_input.h"
 
 namespace placedb::cli {
@@ -17,7 +18,8 @@ namespace placedb::cli {
 struct MappingRequest {
   std::string map_path;
   std::string source;
-  std::string log_path;  // empty: no log
+  SourceOptions source_options;  // a bag's topic, a live source's rate cap
+  std::string log_path;          // empty: no log
   SettingsInput settings;
   std::optional<std::int64_t> stop_after;
   bool new_session = false;
@@ -33,6 +35,7 @@ struct MappingSummary {
   std::int64_t bad = 0;            // frames recorded as bad (the unreadable ones among them)
   std::int64_t loop_closures = 0;  // frames whose loop-closure hypothesis was accepted
   std::int64_t locations_created = 0;
+  std::int64_t dropped = 0;    // a live source's frames that arrived while the engine was busy
   bool interrupted = false;    // Ctrl-C / SIGTERM
   bool stopped_early = false;  // --stop-after
   bool reached_end = false;    // the source has no frame left

@@ -13,7 +13,8 @@ struct ProgressSample {
   std::int64_t source_index = 0;  // of the frame just processed
   std::int64_t locations = 0;     // locations created by this run
   std::int64_t wm_size = 0;
-  std::int64_t loop_closures = 0;  // accepted by this run
+  std::int64_t loop_closures = 0;       // accepted by this run
+  std::optional<std::int64_t> dropped;  // a live source's dropped frames
 };
 
 class ProgressReporter {

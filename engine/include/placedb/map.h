@@ -63,6 +63,7 @@ struct FrameResult {
   std::int64_t frame_id = 0;
   std::int64_t session_id = 0;
   std::int64_t source_index = 0;
+  std::optional<std::int64_t> stamp_ns;  // the stamp given to process(), stored with the frame
   FrameOutcome outcome = FrameOutcome::kNewLocation;
   std::int64_t location_id = 0;  // the location holding this frame; 0 when bad
   Hypothesis hypothesis;
@@ -141,12 +142,15 @@ class Map {
   virtual SessionInfo resumeSession(std::int64_t session_id) = 0;
 
   // One frame: features, quantisation, STM, filter, memory management, one committed
-  // transaction. An image too poor in features is recorded as a bad frame.
+  // transaction. An image too poor in features is recorded as a bad frame. `stamp_ns`, the
+  // source's time stamp of the frame (a bag message's header.stamp, ns since the epoch), is
+  // stored with it (frames.stamp_ns).
   virtual FrameResult process(const cv::Mat& image, std::int64_t source_index,
-                              const std::string& source_path) = 0;
+                              const std::string& source_path,
+                              std::optional<std::int64_t> stamp_ns = std::nullopt) = 0;
   // A frame that could not be read: recorded as bad, with the reason in the log only.
-  virtual FrameResult recordUnreadable(std::int64_t source_index,
-                                       const std::string& source_path) = 0;
+  virtual FrameResult recordUnreadable(std::int64_t source_index, const std::string& source_path,
+                                       std::optional<std::int64_t> stamp_ns = std::nullopt) = 0;
 
   // Localisation against the locations of every tier (STM, WM and LTM); changes nothing.
   virtual QueryResult query(const cv::Mat& image, std::size_t top_k = 5) = 0;

@@ -42,8 +42,10 @@ class MapImpl final : public Map {
                            const std::string& source_digest = "") override;
   SessionInfo resumeSession(std::int64_t session_id) override;
   FrameResult process(const cv::Mat& image, std::int64_t source_index,
-                      const std::string& source_path) override;
-  FrameResult recordUnreadable(std::int64_t source_index, const std::string& source_path) override;
+                      const std::string& source_path,
+                      std::optional<std::int64_t> stamp_ns = std::nullopt) override;
+  FrameResult recordUnreadable(std::int64_t source_index, const std::string& source_path,
+                               std::optional<std::int64_t> stamp_ns = std::nullopt) override;
   QueryResult query(const cv::Mat& image, std::size_t top_k) override;
   std::size_t importVocabulary(const std::string& file, bool text, VocabularyMode mode) override;
   void close() override;
@@ -151,6 +153,7 @@ class MapImpl final : public Map {
 
   std::unique_ptr<storage::MapStore> store_;
   Mode mode_;
+  std::optional<std::int64_t> frame_stamp_ns_;  // the source's stamp of the frame in flight
   Options options_;
   std::unique_ptr<FeatureExtractor> extractor_;
   std::unique_ptr<vocab::Vocabulary> vocabulary_;

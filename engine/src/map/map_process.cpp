@@ -42,8 +42,9 @@ struct MapImpl::FrameWrite {
 };
 
 FrameResult MapImpl::process(const cv::Mat& image, std::int64_t source_index,
-                             const std::string& source_path) {
+                             const std::string& source_path, std::optional<std::int64_t> stamp_ns) {
   requireSession("process");
+  frame_stamp_ns_ = stamp_ns;
   const auto start = Clock::now();
   cv::Mat grey;
   try {
@@ -58,8 +59,10 @@ FrameResult MapImpl::process(const cv::Mat& image, std::int64_t source_index,
   return processFeatures(features, source_index, source_path, msSince(start));
 }
 
-FrameResult MapImpl::recordUnreadable(std::int64_t source_index, const std::string& source_path) {
+FrameResult MapImpl::recordUnreadable(std::int64_t source_index, const std::string& source_path,
+                                      std::optional<std::int64_t> stamp_ns) {
   requireSession("recordUnreadable");
+  frame_stamp_ns_ = stamp_ns;
   return recordBad(source_index, source_path, 0, StageTimes());
 }
 
@@ -445,6 +448,7 @@ void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_pa
   w.frame.session_id = r.session_id;
   w.frame.source_index = r.source_index;
   w.frame.source_path = source_path;
+  w.frame.stamp_ns = r.stamp_ns = frame_stamp_ns_;
   w.frame.stats = {
       static_cast<std::int64_t>(r.feature_count),   static_cast<std::int64_t>(r.words_created),
       static_cast<std::int64_t>(r.vocabulary_size), static_cast<std::int64_t>(r.wm_size),

@@ -48,6 +48,7 @@ struct FrameRecord {
   std::optional<std::int64_t> location_id;  // the location holding the frame; none when bad
   FrameTimings timings;
   FrameStats stats;
+  std::optional<std::int64_t> stamp_ns;  // the source's time stamp (a bag's header.stamp)
 };
 
 struct LocationRecord {

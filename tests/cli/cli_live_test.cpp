@@ -1,0 +1,120 @@
+// Live sources: a stream served on the loopback address by a process the test starts (a camera
+// would need the v4l2loopback kernel module, which a test machine rarely has). Each frame placedb
+// takes is the newest; frames that arrive while it is busy are dropped and counted; SIGINT closes
+// the session cleanly; a live source always starts a new session.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sqlite3.h>
+
+#include <chrono>
+#include <opencv2/imgcodecs.hpp>
+#include <regex>
+#include <thread>
+
+#include "child_process.h"
+#include "cli_scratch.h"
+
+namespace placedb::testing {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The sequence's images as JPEG files, the stream's frames.
+std::vector<std::string> jpegFrames(const fs::path& seq, const fs::path& dir, int count) {
+  std::vector<std::string> files;
+  for (int i = 0; i < count; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof name, "%06d", i);
+    const cv::Mat image = cv::imread((seq / "images" / (std::string(name) + ".png")).string());
+    const fs::path jpeg = dir / (std::string(name) + ".jpg");
+    cv::imwrite(jpeg.string(), image, {cv::IMWRITE_JPEG_QUALITY, 95});
+    files.push_back(jpeg.string());
+  }
+  return files;
+}
+
+// A stream of `fps` frames a second for `seconds` seconds; returns the server and its URL.
+std::pair<std::unique_ptr<ChildProcess>, std::string> serve(const std::vector<std::string>& frames,
+                                                            double fps, double seconds) {
+  std::vector<std::string> args = {"/usr/bin/python3", PLACEDB_MJPEG_SERVER, std::to_string(fps),
+                                   std::to_string(seconds)};
+  args.insert(args.end(), frames.begin(), frames.end());
+  auto server = std::make_unique<ChildProcess>(args);
+  const auto port = server->readLine(10000);
+  EXPECT_TRUE(port) << "the stream server did not start";
+  return {std::move(server), "http://127.0.0.1:" + port.value_or("0") + "/stream.mjpg"};
+}
+
+std::int64_t count(const fs::path& map, const std::string& sql) {
+  sqlite3* db = nullptr;
+  sqlite3_open(map.c_str(), &db);
+  sqlite3_stmt* s = nullptr;
+  sqlite3_prepare_v2(db, sql.c_str(), -1, &s, nullptr);
+  const std::int64_t value = sqlite3_step(s) == SQLITE_ROW ? sqlite3_column_int64(s, 0) : -1;
+  sqlite3_finalize(s);
+  sqlite3_close(db);
+  return value;
+}
+
+// A stream faster than --fps lets placedb take frames: it takes about fps a second, drops the
+// rest and says how many; when the stream ends, the session ends.
+TEST(CliLive, StreamFramesAreTheNewestAndTheRestAreCountedAsDropped) {
+  auto seq = smallSequence(20);
+  auto dir = scratchDir("CliLive_stream");
+  auto [server, url] = serve(jpegFrames(seq, dir, 20), /*fps=*/25, /*seconds=*/4);
+  const fs::path map = dir / "live.placedb";
+  const auto r =
+      placedb({"map", map.string(), url, "--fps", "5", "--log", (dir / "live.csv").string()}, dir);
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  std::smatch m;
+  ASSERT_TRUE(
+      std::regex_search(r.err, m, std::regex("(\\d+) frames .*; (\\d+) dropped while busy")))
+      << r.err;
+  const int processed = std::stoi(m[1]), dropped = std::stoi(m[2]);
+  // ~4 s at 5 a second of a 25-a-second stream (the stream's start and end blur the edges).
+  EXPECT_GE(processed, 8) << r.err;
+  EXPECT_LE(processed, 30) << r.err;
+  EXPECT_GE(dropped, processed) << r.err;  // 25 a second offered, at most 5 a second taken
+  EXPECT_EQ(count(map, "SELECT count(*) FROM frames"), processed);
+  EXPECT_EQ(count(map, "SELECT count(*) FROM frames WHERE outcome = 2"), 0);
+  EXPECT_EQ(count(map, "SELECT clean_close FROM sessions"), 1);
+  server->exitCode();
+}
+
+// Ctrl-C while the stream still runs: the frame in flight finishes, the session is closed
+// cleanly, exit 0; the next run over the same stream starts a new session.
+TEST(CliLive, InterruptClosesTheSessionCleanlyAndTheNextRunIsANewSession) {
+  auto seq = smallSequence(10);
+  auto dir = scratchDir("CliLive_interrupt");
+  const auto frames = jpegFrames(seq, dir, 10);
+  const fs::path map = dir / "live.placedb";
+  for (int run = 1; run <= 2; ++run) {
+    auto [server, url] = serve(frames, 10, 60);
+    Process mapping({PLACEDB_CLI_BINARY, "map", map.string(), url}, dir);
+    std::this_thread::sleep_for(std::chrono::seconds(3));
+    mapping.signal(SIGINT);
+    const auto r = mapping.wait();
+    EXPECT_EQ(r.exit_code, 0) << describe(r);
+    EXPECT_NE(r.err.find("interrupted; the session is closed"), std::string::npos) << r.err;
+    EXPECT_EQ(count(map, "SELECT count(*) FROM sessions"), run);
+    EXPECT_EQ(count(map, "SELECT min(clean_close) FROM sessions"), 1);
+    EXPECT_GT(count(map, "SELECT count(*) FROM frames WHERE session_id = " + std::to_string(run)),
+              3);
+    server->kill();
+    server->exitCode();
+  }
+}
+
+TEST(CliLive, UnreachableStreamAndMisplacedOptionsAreOneLine) {
+  auto seq = smallSequence(3);
+  auto dir = scratchDir("CliLive_refused");
+  const auto map = (dir / "m.placedb").string();
+  expectCleanError(placedb({"map", map, "http://127.0.0.1:9/none.mjpg"}, dir), 3,
+                   "http://127.0.0.1:9/none.mjpg");
+  expectCleanError(placedb({"map", map, (seq / "frames.txt").string(), "--fps", "5"}, dir), 2,
+                   "--fps");
+  EXPECT_FALSE(fs::exists(map));
+}
+
+}  // namespace
+}  // namespace placedb::testing

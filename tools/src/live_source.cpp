@@ -1,0 +1,117 @@
+#include "live_source.h"
+
+#include <fmt/format.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <opencv2/videoio.hpp>
+#include <regex>
+#include <thread>
+
+#include "interrupt.h"
+#include "placedb/error.h"
+
+namespace placedb::cli {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+class LiveSource : public ImageSource {
+ public:
+  LiveSource(const std::string& source, double max_fps) : name_(source), max_fps_(max_fps) {
+    quietVideoLibraries();
+    std::smatch m;
+    const std::string text = source;
+    bool opened = false;
+    if (std::regex_match(text, m, std::regex("camera:([0-9]+)")))
+      opened = capture_.open(std::stoi(m[1]), cv::CAP_V4L2);
+    else if (text.rfind("/dev/", 0) == 0)
+      opened = capture_.open(text, cv::CAP_V4L2);
+    else
+      opened = capture_.open(text, cv::CAP_FFMPEG);
+    if (!opened) throw Error(ErrorCode::kIo, fmt::format("cannot open live source {}", source));
+    grabber_ = std::thread([this] { grab(); });
+  }
+  ~LiveSource() override {
+    stop_ = true;
+    if (grabber_.joinable()) grabber_.join();
+  }
+
+  const std::string& canonicalPath() const override { return name_; }
+  std::string kind() const override { return "live"; }
+  std::optional<std::int64_t> size() const override { return std::nullopt; }
+  void seek(std::int64_t) override {}  // a live source always starts a new session
+  std::string digest() const override { return ""; }
+  std::int64_t dropped() const override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return arrived_ - taken_ - (fresh_ ? 1 : 0);
+  }
+
+  bool read(SourceFrame& frame) override {
+    if (max_fps_ > 0 && taken_ > 0) {
+      const auto due = last_taken_ + std::chrono::duration_cast<Clock::duration>(
+                                         std::chrono::duration<double>(1.0 / max_fps_));
+      while (Clock::now() < due && !interruptRequested())
+        std::this_thread::sleep_for(
+            std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(20)));
+    }
+    std::unique_lock<std::mutex> lock(mutex_);
+    // Waits in short steps so that Ctrl-C ends a wait for a camera that stopped sending.
+    while (!fresh_ && !ended_ && !interruptRequested())
+      arrived_cv_.wait_for(lock, std::chrono::milliseconds(100));
+    if (!fresh_) return false;
+    frame.index = taken_++;
+    frame.path = fmt::format("{}#{}", name_, frame.index);
+    frame.image = latest_;
+    frame.problem = latest_.empty() ? "empty frame" : "";
+    frame.stamp_ns = std::nullopt;
+    latest_ = cv::Mat();
+    fresh_ = false;
+    last_taken_ = Clock::now();
+    return true;
+  }
+
+ private:
+  void grab() {
+    cv::Mat image;
+    while (!stop_) {
+      if (!capture_.read(image) || image.empty()) break;
+      std::lock_guard<std::mutex> lock(mutex_);
+      latest_ = image.clone();  // the previous one, if not taken, is dropped
+      fresh_ = true;
+      ++arrived_;
+      arrived_cv_.notify_one();
+    }
+    std::lock_guard<std::mutex> lock(mutex_);
+    ended_ = true;
+    arrived_cv_.notify_one();
+  }
+
+  std::string name_;
+  double max_fps_;
+  cv::VideoCapture capture_;
+  std::thread grabber_;
+  std::atomic<bool> stop_{false};
+  mutable std::mutex mutex_;
+  std::condition_variable arrived_cv_;
+  cv::Mat latest_;
+  bool fresh_ = false, ended_ = false;
+  std::int64_t arrived_ = 0, taken_ = 0;
+  Clock::time_point last_taken_;
+};
+
+}  // namespace
+
+bool isLiveSource(const std::string& source) {
+  return std::regex_match(source, std::regex("camera:[0-9]+|/dev/video[0-9]+")) ||
+         source.rfind("rtsp://", 0) == 0 || source.rfind("http://", 0) == 0 ||
+         source.rfind("https://", 0) == 0;
+}
+
+std::unique_ptr<ImageSource> openLiveSource(const std::string& source, double max_fps) {
+  return std::make_unique<LiveSource>(source, max_fps);
+}
+
+}  // namespace placedb::cli
