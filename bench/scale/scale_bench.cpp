@@ -151,21 +151,21 @@ Flags parseFlags(int argc, char** argv) {
 }
 
 // The hypothesis frame that best explains an accepted closure of frame q: one the ground truth
-// lists if there is one, else one that shares ground with q (the judge of an accepted closure,
-// see sharesGround()), else the one sharing the most.
+// lists if there is one, else the one sharing the most ground with q. The list and the judge of
+// a closure are one rule (isRevisit()), so "listed" and "same" agree; both columns stay so that
+// rows compare with runs made before they did.
 struct ClosureView {
   int r = -1;
   placedb::synthetic::ViewRelation relation;
   bool listed = false;  // (q, r) is in the ground truth's revisit list
-  bool same = false;    // q and r show the same ground: the closure is right
+  bool same = false;    // isRevisit() of q and r: the closure is right
 };
 
 placedb::synthetic::GroundTruthSettings truthSettings(
     const placedb::synthetic::SyntheticOptions& o) {
   placedb::synthetic::GroundTruthSettings settings;
   settings.min_gap = o.min_revisit_gap;
-  settings.min_overlap = o.gt_min_overlap;
-  settings.max_heading = o.gt_max_heading_degrees * CV_PI / 180.0;
+  settings.min_shared = o.gt_min_shared;
   return settings;
 }
 
@@ -181,7 +181,7 @@ ClosureView bestView(const placedb::synthetic::SyntheticSequence& seq, int q,
     v.r = r;
     v.relation = placedb::synthetic::relateViews(q, seq.pose(q), r, seq.pose(r), seq.camera());
     v.listed = std::binary_search(truth.begin(), truth.end(), r);
-    v.same = placedb::synthetic::sharesGround(v.relation, settings);
+    v.same = placedb::synthetic::isRevisit(v.relation, settings);
     if (best.r < 0 || std::make_tuple(v.listed, v.same, v.relation.shared) >
                           std::make_tuple(best.listed, best.same, best.relation.shared))
       best = v;

@@ -562,5 +562,17 @@ TEST(CliDemo, MapsScoresAndPlotsWithoutOutsideData) {
   EXPECT_EQ(frameColumn(readCsv(dir / "out" / "run.csv")), range(0, 59));
 }
 
+// The default tour, scored against its own ground truth: every closure the engine accepts is
+// onto ground the camera has seen. Its last street leads back to the start, and the closures
+// from frame 179 on, made while the camera approaches frame 0's place, are right (see
+// GroundTruth.DemoTourApproachingItsStartRevisitsIt).
+TEST(CliDemo, DefaultTourAcceptsNoWrongClosure) {
+  auto dir = scratchDir("CliDemo_default");
+  auto r = placedb({"demo", "--out", (dir / "out").string()}, dir);
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_NE(r.out.find("\naccepted_false: 0\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\naccepted_precision: 100.0\n"), std::string::npos) << r.out;
+}
+
 }  // namespace
 }  // namespace placedb::testing

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -37,22 +38,47 @@ TEST(GroundTruth, SpatialHashFindsExactlyWhatBruteForceFinds) {
   for (int i = 0; i < sequence.size(); ++i) poses.push_back(sequence.pose(i));
   const GroundTruthSettings settings;  // the same definition as the sequence's defaults
   std::vector<std::pair<int, int>> brute;
+  int opposite = 0;  // pairs driven more than 90 degrees apart
   for (int q = 0; q < sequence.size(); ++q) {
     for (int r = 0; q - r >= settings.min_gap; ++r) {
-      const double turn = std::abs(std::remainder(poses[q].heading - poses[r].heading, 2 * CV_PI));
-      if (turn > settings.max_heading) continue;
-      if (footprintOverlap(sequence.footprint(q), sequence.footprint(r)) >= settings.min_overlap) {
+      const auto a = sequence.footprint(q), b = sequence.footprint(r);
+      const double shared = footprintIntersection(a, b) / std::min(polygonArea(a), polygonArea(b));
+      if (shared >= settings.min_shared) {
         brute.emplace_back(q, r);
+        opposite += headingDifference(poses[q].heading, poses[r].heading) > CV_PI / 2;
       }
     }
   }
   ASSERT_FALSE(brute.empty());
+  EXPECT_GT(opposite, 0) << "the route should drive some street the other way";
   EXPECT_EQ(computeRevisits(poses, sequence.camera(), settings), brute);
   EXPECT_EQ(sequence.groundTruth(), brute);
 }
 
+// The demo's tour (300 frames, seed 1) ends by driving back up the street it started on: frames
+// 177-188 approach frame 0 and see the ground of frames 0-11 from behind them, in the same
+// direction, before the camera reaches the start (frame 189 stands where frame 0 stood). The
+// engine closes loops from frame 179 on, and they are right: the rule lists these pairs.
+TEST(GroundTruth, DemoTourApproachingItsStartRevisitsIt) {
+  const SyntheticSequence sequence(demoOptions(300, 1));
+  for (int q = 179; q <= 188; ++q) {
+    const auto refs = sequence.revisitsOf(q);
+    ASSERT_FALSE(refs.empty()) << "frame " << q;
+    EXPECT_EQ(refs.front(), 0) << "frame " << q;
+    EXPECT_LE(refs.back(), 11) << "frame " << q;
+    // Every frame of the start the closures name (0-9 up to frame 188) shares ground with it.
+    if (q >= 187) {
+      for (int r = 0; r <= 9; ++r) {
+        EXPECT_TRUE(std::binary_search(refs.begin(), refs.end(), r)) << q << " " << r;
+      }
+    }
+  }
+}
+
 // For ground-truth pairs the known homography lines the two images up: after warping r onto q
-// they share most of the picture and it correlates strongly, through exposure and noise changes.
+// they share part of the picture and it correlates strongly, through exposure and noise changes.
+// A quarter of the smaller ground footprint can lie in the far part of q's view, where a square
+// metre takes few pixels, so the shared share of the picture can be well below a quarter.
 TEST(GroundTruth, PairsShareTheirContent) {
   const SyntheticSequence sequence(demoOptions(800, 11));
   const auto& pairs = sequence.groundTruth();
@@ -69,7 +95,7 @@ TEST(GroundTruth, PairsShareTheirContent) {
     cv::warpPerspective(full, mask, r_to_q, size, cv::INTER_NEAREST);
     cv::erode(mask, mask, cv::Mat(), cv::Point(-1, -1), 2);
     const double shared = cv::countNonZero(mask) / static_cast<double>(mask.total());
-    EXPECT_GT(shared, 0.4) << "pair " << q << " " << r;
+    EXPECT_GT(shared, 0.1) << "pair " << q << " " << r;
     EXPECT_GT(maskedNcc(sequence.render(q), warped, mask), 0.75) << "pair " << q << " " << r;
   }
 }
@@ -142,12 +168,12 @@ TEST(GroundTruth, RelateViewsMeasuresWhatTheRuleIsStatedIn) {
   const ViewRelation wrapped =
       relateViews(100, groundPose(0, 0, 350), 0, groundPose(0, 0, 10), camera);
   EXPECT_NEAR(wrapped.heading * 180 / CV_PI, 20.0, 1e-9);
-  EXPECT_TRUE(isRevisit(wrapped, settings) == (wrapped.iou >= settings.min_overlap));
-  // Turned 40 degrees on the spot: the views share ground but the rule's heading bound fails.
+  EXPECT_TRUE(isRevisit(wrapped, settings) == (wrapped.shared >= settings.min_shared));
+  // Turned 40 degrees on the spot: the views share ground, and the heading plays no part.
   const ViewRelation turned =
       relateViews(100, groundPose(0, 0, 40), 0, groundPose(0, 0, 0), camera);
-  EXPECT_GT(turned.shared, 0.0);
-  EXPECT_FALSE(isRevisit(turned, settings));
+  EXPECT_GT(turned.shared, settings.min_shared);
+  EXPECT_TRUE(isRevisit(turned, settings));
 
   // Driving on along the street: the shared ground falls, and the shared fraction of the smaller
   // footprint is never below the IoU.
@@ -162,10 +188,9 @@ TEST(GroundTruth, RelateViewsMeasuresWhatTheRuleIsStatedIn) {
   EXPECT_EQ(last_shared, 0.0);  // 30 m on, the two footprints are disjoint
 }
 
-// The judge of an accepted closure: common ground, any heading. Driving a street the other way
-// sees the same ground rotated half a turn; the revisit rule does not list it, the judge accepts
-// a closure onto it.
-TEST(GroundTruth, SharesGroundJudgesClosuresOnCommonGroundWhateverTheHeading) {
+// Common ground, any heading. Driving a street the other way sees the same ground rotated half
+// a turn: a revisit, and a closure onto it is right.
+TEST(GroundTruth, IsRevisitOnCommonGroundWhateverTheHeading) {
   const auto camera = CameraIntrinsics::fromHorizontalFov(160, 120, 60.0 * CV_PI / 180.0);
   const GroundTruthSettings settings;
   const Pose outward = groundPose(0, 0, 0);
@@ -174,34 +199,31 @@ TEST(GroundTruth, SharesGroundJudgesClosuresOnCommonGroundWhateverTheHeading) {
   const ViewRelation back = relateViews(500, groundPose(8.7, 0, 180), 100, outward, camera);
   EXPECT_NEAR(back.heading * 180 / CV_PI, 180.0, 1e-9);
   EXPECT_GT(back.shared, 0.5);
-  EXPECT_FALSE(isRevisit(back, settings));
-  EXPECT_TRUE(sharesGround(back, settings));
-  // The same views 49 frames apart: the recent past is not a loop, for either rule.
+  EXPECT_TRUE(isRevisit(back, settings));
+  // The same views 49 frames apart: the recent past is not a loop.
   EXPECT_FALSE(
-      sharesGround(relateViews(149, groundPose(8.7, 0, 180), 100, outward, camera), settings));
+      isRevisit(relateViews(149, groundPose(8.7, 0, 180), 100, outward, camera), settings));
   // Side by side across a crossing, turned a quarter: still common ground.
   const ViewRelation crossing = relateViews(500, groundPose(4, -4, 90), 100, outward, camera);
   EXPECT_GE(crossing.shared, settings.min_shared);
-  EXPECT_TRUE(sharesGround(crossing, settings));
-  // Every revisit shares ground (IoU >= 0.5 implies shared >= 0.5).
+  EXPECT_TRUE(isRevisit(crossing, settings));
+  // Alike views: IoU >= 0.5 implies shared >= 0.5.
   const ViewRelation alike = relateViews(500, groundPose(1, 0.5, 10), 100, outward, camera);
+  EXPECT_GE(alike.iou, 0.5);
   EXPECT_TRUE(isRevisit(alike, settings));
-  EXPECT_TRUE(sharesGround(alike, settings));
   // Looking away from each other, or a street apart: nothing in common, a false closure.
-  EXPECT_FALSE(
-      sharesGround(relateViews(500, groundPose(0, 0, 180), 100, outward, camera), settings));
-  EXPECT_FALSE(
-      sharesGround(relateViews(500, groundPose(0, 20, 0), 100, outward, camera), settings));
+  EXPECT_FALSE(isRevisit(relateViews(500, groundPose(0, 0, 180), 100, outward, camera), settings));
+  EXPECT_FALSE(isRevisit(relateViews(500, groundPose(0, 20, 0), 100, outward, camera), settings));
   // A sliver of common ground is not enough: the bound is on the smaller footprint's share.
   const ViewRelation sliver = relateViews(500, groundPose(7, 0, 0), 100, outward, camera);
   EXPECT_GT(sliver.shared, 0.0);
   EXPECT_LT(sliver.shared, settings.min_shared);
-  EXPECT_FALSE(sharesGround(sliver, settings));
+  EXPECT_FALSE(isRevisit(sliver, settings));
 }
 
-// The rule as the bench applies it to one closure is the rule the list was made with, and every
-// listed pair passes the closure judge: a closure onto a listed frame is never counted false.
-TEST(GroundTruth, IsRevisitAndSharesGroundAgreeWithTheList) {
+// The rule as a benchmark applies it to one closure (relateViews() then isRevisit()) is the rule
+// the list was made with: a closure onto a listed frame is right, and onto any other frame wrong.
+TEST(GroundTruth, IsRevisitAgreesWithTheList) {
   const SyntheticSequence sequence(demoOptions(400, 5));
   const GroundTruthSettings settings;
   std::vector<std::pair<int, int>> listed;
@@ -209,9 +231,7 @@ TEST(GroundTruth, IsRevisitAndSharesGroundAgreeWithTheList) {
     for (int r = 0; r < q; ++r) {
       const ViewRelation v =
           relateViews(q, sequence.pose(q), r, sequence.pose(r), sequence.camera());
-      if (!isRevisit(v, settings)) continue;
-      listed.emplace_back(q, r);
-      EXPECT_TRUE(sharesGround(v, settings)) << q << " " << r;
+      if (isRevisit(v, settings)) listed.emplace_back(q, r);
     }
   }
   ASSERT_FALSE(listed.empty());

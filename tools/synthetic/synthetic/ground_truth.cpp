@@ -13,19 +13,10 @@ std::uint64_t cellKey(std::int64_t cx, std::int64_t cy) {
   return (static_cast<std::uint64_t>(cx) << 32) ^ static_cast<std::uint64_t>(cy & 0xffffffff);
 }
 
-}  // namespace
-
-double headingDifference(double a, double b) {
-  const double d = std::remainder(a - b, 2 * CV_PI);
-  return std::abs(d);
-}
-
-ViewRelation relateViews(int q, const Pose& q_pose, int r, const Pose& r_pose,
-                         const CameraIntrinsics& camera) {
-  const auto a = groundFootprint(q_pose, camera);
-  const auto b = groundFootprint(r_pose, camera);
+ViewRelation relateFootprints(int gap, const Pose& q_pose, const std::array<cv::Point2d, 4>& a,
+                              const Pose& r_pose, const std::array<cv::Point2d, 4>& b) {
   ViewRelation out;
-  out.gap = q - r;
+  out.gap = gap;
   out.heading = headingDifference(q_pose.heading, r_pose.heading);
   const double inter = footprintIntersection(a, b);
   const double area_a = polygonArea(a), area_b = polygonArea(b);
@@ -35,12 +26,20 @@ ViewRelation relateViews(int q, const Pose& q_pose, int r, const Pose& r_pose,
   return out;
 }
 
-bool isRevisit(const ViewRelation& relation, const GroundTruthSettings& settings) {
-  return relation.gap >= settings.min_gap && relation.heading <= settings.max_heading &&
-         relation.iou >= settings.min_overlap;
+}  // namespace
+
+double headingDifference(double a, double b) {
+  const double d = std::remainder(a - b, 2 * CV_PI);
+  return std::abs(d);
 }
 
-bool sharesGround(const ViewRelation& relation, const GroundTruthSettings& settings) {
+ViewRelation relateViews(int q, const Pose& q_pose, int r, const Pose& r_pose,
+                         const CameraIntrinsics& camera) {
+  return relateFootprints(q - r, q_pose, groundFootprint(q_pose, camera), r_pose,
+                          groundFootprint(r_pose, camera));
+}
+
+bool isRevisit(const ViewRelation& relation, const GroundTruthSettings& settings) {
   return relation.gap >= settings.min_gap && relation.shared >= settings.min_shared;
 }
 
@@ -73,10 +72,11 @@ std::vector<std::pair<int, int>> computeRevisits(const std::vector<Pose>& poses,
     }
   }
   if (n == 0) return {};
-  // Two footprints with IoU >= 0.5 (or any positive bound below it, shifted) have centres much
-  // closer than one extent, so a cell of one extent and its eight neighbours hold every candidate.
-  const double cell = std::max(extent, 1e-6);
-  const double reach = extent;
+  // A footprint is convex and holds its centre, so two footprints that share any ground have
+  // centres at most two extents apart: a cell of two extents and its eight neighbours hold
+  // every candidate.
+  const double reach = 2 * std::max(extent, 1e-6);
+  const double cell = reach;
   std::unordered_map<std::uint64_t, std::vector<int>> grid;
   auto cellOf = [&](cv::Point2d p) {
     return std::make_pair(static_cast<std::int64_t>(std::floor(p.x / cell)),
@@ -99,13 +99,14 @@ std::vector<std::pair<int, int>> computeRevisits(const std::vector<Pose>& poses,
         for (int r : found->second) {
           const cv::Point2d d = centres[q] - centres[r];
           if (d.x * d.x + d.y * d.y > reach * reach) continue;
-          if (headingDifference(poses[q].heading, poses[r].heading) > settings.max_heading)
-            continue;
-          // The shared area is at most the boxes' shared area and the union at least the larger
-          // footprint: a cheap, sound rejection before the exact polygon clipping.
+          // The shared area is at most the boxes' shared area: a cheap, sound rejection before
+          // the exact polygon clipping.
+          const double smaller = std::min(areas[q], areas[r]);
           const double box_shared = (boxes[q] & boxes[r]).area();
-          if (box_shared < settings.min_overlap * std::max(areas[q], areas[r])) continue;
-          if (footprintOverlap(footprints[q], footprints[r]) >= settings.min_overlap) {
+          if (box_shared < settings.min_shared * smaller) continue;
+          const ViewRelation relation =
+              relateFootprints(q - r, poses[q], footprints[q], poses[r], footprints[r]);
+          if (isRevisit(relation, settings)) {
             pairs.emplace_back(q, r);
           }
         }

@@ -59,9 +59,7 @@ void validate(const SyntheticOptions& o, const CameraIntrinsics& camera) {
   require(o.speed > 0 && o.speed < 10, "speed must be in (0, 10) metres per frame");
   require(o.camera_height > 0.5 && o.camera_height < 100, "camera_height must be in (0.5, 100)");
   require(o.hfov_degrees > 10 && o.hfov_degrees < 120, "hfov_degrees must be in (10, 120)");
-  require(o.gt_min_overlap > 0 && o.gt_min_overlap <= 1, "gt_min_overlap must be in (0, 1]");
-  require(o.gt_max_heading_degrees > 0 && o.gt_max_heading_degrees <= 180,
-          "gt_max_heading_degrees must be in (0, 180]");
+  require(o.gt_min_shared > 0 && o.gt_min_shared <= 1, "gt_min_shared must be in (0, 1]");
   // The top image row must stay well below the horizon or the ground footprint is unbounded.
   const double top_ray =
       o.pitch_degrees - o.pitch_wander_degrees - camera.verticalFov() / kDegree / 2;
@@ -108,7 +106,25 @@ std::vector<Pose> planPoses(const SyntheticOptions& o, int attempt) {
   return poses;
 }
 
-// How far a route's ground truth is from what the options ask for (0 is perfect).
+// The ground-truth pairs whose views are alike: the two footprints overlap with IoU >= 0.5 and
+// the headings are within 30 degrees, i.e. the same street driven again in the same direction,
+// which is what the route planner plans as a repeat. Route variants are chosen on these, not on
+// the whole ground truth, so that the frames of a seed do not change when the ground truth's
+// rule does (every such pair shares at least half of either footprint, so with gt_min_shared up
+// to 0.5 it is in the list).
+std::vector<std::pair<int, int>> alikePairs(const std::vector<Pose>& poses,
+                                            const CameraIntrinsics& camera,
+                                            const std::vector<std::pair<int, int>>& pairs) {
+  std::vector<std::pair<int, int>> alike;
+  for (const auto& [q, r] : pairs) {
+    const ViewRelation v = relateViews(q, poses[q], r, poses[r], camera);
+    if (v.iou >= 0.5 && v.heading <= 30.0 * kDegree) alike.emplace_back(q, r);
+  }
+  return alike;
+}
+
+// How far a route's planned repeats (alikePairs()) are from what the options ask for (0 is
+// perfect).
 double routeScore(const SyntheticOptions& o, const std::vector<std::pair<int, int>>& pairs) {
   int revisiting = 0;
   for (std::size_t k = 0; k < pairs.size(); ++k) {
@@ -140,10 +156,9 @@ SyntheticSequence::SyntheticSequence(const SyntheticOptions& options)
     std::vector<Pose> poses = planPoses(o, attempt);
     GroundTruthSettings gt;
     gt.min_gap = o.min_revisit_gap;
-    gt.min_overlap = o.gt_min_overlap;
-    gt.max_heading = o.gt_max_heading_degrees * kDegree;
+    gt.min_shared = o.gt_min_shared;
     std::vector<std::pair<int, int>> pairs = computeRevisits(poses, camera_, gt);
-    const double score = routeScore(o, pairs);
+    const double score = attempts > 1 ? routeScore(o, alikePairs(poses, camera_, pairs)) : 0;
     if (score < best_score) {
       best_score = score;
       poses_ = std::move(poses);

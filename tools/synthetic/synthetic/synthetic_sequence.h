@@ -56,9 +56,9 @@ struct SyntheticOptions {
   double shading_change = 14.0;     // grey levels of a linear light gradient across the image
   double noise_sigma = 2.0;         // grey levels of per-pixel sensor noise
 
-  // Ground truth (see ground_truth.h).
-  double gt_min_overlap = 0.5;
-  double gt_max_heading_degrees = 30.0;
+  // Ground truth (see ground_truth.h): frames at least min_revisit_gap apart whose views share
+  // at least this much of the smaller ground footprint.
+  double gt_min_shared = 0.25;
 
   std::size_t tile_cache = 256;  // texture tiles kept (64 KiB each)
 };
