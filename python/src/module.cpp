@@ -88,12 +88,12 @@ class PyMap {
   }
 
   FrameResult process(const py::array& image, std::optional<std::int64_t> source_index,
-                      const std::string& source_path) {
+                      const std::string& source_path, std::optional<std::int64_t> stamp_ns) {
     py::array contiguous;
     const cv::Mat mat = imageOf(image, contiguous);
     return locked([&](Map& map) {
       const std::int64_t index = source_index.value_or(next_index_);
-      FrameResult result = map.process(mat, index, source_path);
+      FrameResult result = map.process(mat, index, source_path, stamp_ns);
       next_index_ = index + 1;
       return result;
     });
@@ -301,9 +301,10 @@ void bindMap(py::module_& m) {
       .def("sessions",
            [](PyMap& self) { return self.locked([](Map& map) { return map.sessions(); }); })
       .def("process", &PyMap::process, py::arg("image"), py::arg("source_index") = py::none(),
-           py::arg("source_path") = "",
+           py::arg("source_path") = "", py::arg("stamp_ns") = py::none(),
            "Maps one numpy image (grey H x W, or BGR H x W x 3); commits it before returning. "
-           "source_index defaults to the previous frame's plus one.")
+           "source_index defaults to the previous frame's plus one; stamp_ns (a bag message's "
+           "header.stamp, ns since the epoch) is stored with the frame.")
       .def("process_file", &PyMap::processFile, py::arg("path"),
            py::arg("source_index") = py::none(),
            "Maps one image file; an unreadable file is recorded as a bad frame")
@@ -367,6 +368,47 @@ PYBIND11_MODULE(placedb, m) {
       },
       py::arg("source"),
       "The images of a folder (natural order) or a list file, as `placedb map` reads them");
+  // A source's frames as `placedb map` reads them: folders, lists, videos, bags, cameras.
+  py::class_<cli::ImageSource>(m, "Frames",
+                               "The frames of a source, in order: iterate to get "
+                               "(index, path, image, stamp_ns) tuples; image is None for a "
+                               "frame that cannot be read")
+      .def_property_readonly("kind", &cli::ImageSource::kind)
+      .def_property_readonly("dropped", &cli::ImageSource::dropped,
+                             "a live source's frames dropped while the caller was busy")
+      .def("__len__",
+           [](const cli::ImageSource& s) {
+             if (!s.size()) throw py::type_error("a live source has no length");
+             return *s.size();
+           })
+      .def(
+          "__iter__", [](cli::ImageSource& s) -> cli::ImageSource& { return s; },
+          py::return_value_policy::reference_internal)
+      .def("__next__", [](cli::ImageSource& s) {
+        cli::SourceFrame frame;
+        bool more = false;
+        {
+          py::gil_scoped_release unlocked;  // a live source waits for its next frame
+          more = s.read(frame);
+        }
+        if (!more) throw py::stop_iteration();
+        return py::make_tuple(
+            frame.index, frame.path,
+            frame.image.empty() ? py::object(py::none()) : py::object(arrayOf(frame.image)),
+            frame.stamp_ns ? py::object(py::int_(*frame.stamp_ns)) : py::object(py::none()));
+      });
+  m.def(
+      "frames",
+      [](const std::string& source, const std::string& topic, double fps) {
+        cli::SourceOptions options;
+        options.topic = topic;
+        options.max_fps = fps;
+        return cli::ImageSource::open(source, options);
+      },
+      py::arg("source"), py::arg("topic") = "", py::arg("fps") = 0.0,
+      "The frames of an image folder, list file, video, ROS 1 or ROS 2 bag (topic: its image "
+      "topic, default the only one), camera (camera:N, /dev/videoN) or stream (rtsp://, "
+      "http://; fps caps the rate), as `placedb map` reads them");
   m.def(
       "read_image", [](const std::string& path) { return arrayOf(readImage(path)); },
       py::arg("path"),

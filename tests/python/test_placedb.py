@@ -21,6 +21,21 @@ def scene(seed):
     return np.clip(image, 0, 255).astype(np.uint8)
 
 
+def write_png(path, image):
+    """A grey 8-bit PNG, without OpenCV or PIL."""
+    import struct
+    import zlib
+
+    raw = b"".join(b"\0" + row.tobytes() for row in image)
+
+    def chunk(kind, data):
+        return (struct.pack(">I", len(data)) + kind + data +
+                struct.pack(">I", zlib.crc32(kind + data) & 0xffffffff))
+    header = struct.pack(">IIBBBBB", image.shape[1], image.shape[0], 8, 0, 0, 0, 0)
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) +
+                     chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
 def test_module_names_its_version_and_license():
     assert placedb.__version__.count(".") == 2
     assert placedb.__license__ == "BSD-3-Clause"
@@ -29,19 +44,8 @@ def test_module_names_its_version_and_license():
 
 
 def test_reads_and_queries_image_files(tmp_path):
-    import zlib, struct
-
-    def png(path, image):  # a grey 8-bit PNG, without OpenCV or PIL
-        raw = b"".join(b"\0" + row.tobytes() for row in image)
-        def chunk(kind, data):
-            return (struct.pack(">I", len(data)) + kind + data +
-                    struct.pack(">I", zlib.crc32(kind + data) & 0xffffffff))
-        header = struct.pack(">IIBBBBB", image.shape[1], image.shape[0], 8, 0, 0, 0, 0)
-        path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) +
-                         chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
-
     for i in range(3):
-        png(tmp_path / f"{i}.png", scene(i))
+        write_png(tmp_path / f"{i}.png", scene(i))
     image = placedb.read_image(str(tmp_path / "1.png"))
     assert image.shape == (240, 320, 3) and image.dtype == np.uint8
     assert (image[:, :, 0] == scene(1)).all()
@@ -274,3 +278,37 @@ def test_one_map_is_safe_to_share_between_threads(tmp_path):
     reader.close()
     worker.join()
     assert len(outcomes) == 20
+
+
+def test_frames_of_a_bag_keep_their_stamps(tmp_path):
+    import sqlite3
+    import subprocess
+
+    for i in range(4):
+        write_png(tmp_path / f"{i}.png", scene(i))
+    folder = placedb.frames(str(tmp_path))
+    assert folder.kind == "folder" and len(folder) == 4
+    assert [index for index, _, _, _ in folder] == [0, 1, 2, 3]
+
+    root = pathlib.Path(__file__).resolve().parents[2]
+    bag = tmp_path / "images.bag"
+    writer = subprocess.run(["/usr/bin/python3", str(root / "tests/cli/bags/write_ros1_bag.py"),
+                             str(bag), "/camera/image", "compressed", "png"] +
+                            [str(tmp_path / f"{i}.png") for i in range(4)],
+                            capture_output=True, text=True)
+    if writer.returncode != 0:
+        pytest.skip(f"cannot write a ROS 1 bag here: {writer.stderr.strip()[-200:]}")
+    frames = placedb.frames(str(bag), topic="/camera/image")
+    assert frames.kind == "bag" and len(frames) == 4
+    path = str(tmp_path / "bag.placedb")
+    with placedb.Map(path) as m:
+        m.begin_session(str(bag))
+        for index, source_path, image, stamp_ns in frames:
+            assert (image[:, :, 0] == scene(index)).all()
+            assert stamp_ns == (1700000000 + index) * 10**9 + index * 1000
+            m.process(image, index, source_path, stamp_ns=stamp_ns)
+    with sqlite3.connect(path) as db:
+        stamps = [row[0] for row in db.execute("SELECT stamp_ns FROM frames ORDER BY id")]
+    assert stamps == [(1700000000 + i) * 10**9 + i * 1000 for i in range(4)]
+    with pytest.raises(placedb.InvalidArgument):
+        placedb.frames(str(tmp_path), topic="/camera/image")
