@@ -258,6 +258,20 @@ TEST(CliBags, Ros2BagMapsAsTheListFileDoesAndResumes) {
     ASSERT_EQ(r.exit_code, 0) << encoding << ": " << describe(r);
     expectSameDecisions(expected, log);
     expectStamps(log);
+    // The stamps travel with the graph too: one per frame a location stands for.
+    const auto csv = dir / (encoding + "_graph");
+    ASSERT_EQ(placedb({"export", map.string(), csv.string(), "--format", "csv"}, dir).exit_code, 0);
+    const auto locations = cli::readCsv(csv / "locations.csv");
+    const int frames = locations.column("frames"), stamps = locations.column("stamps_ns");
+    ASSERT_GE(stamps, 0);
+    const std::string first_frames = locations.cell(0, frames);
+    EXPECT_EQ(first_frames.substr(0, first_frames.find(' ')), "1:0");
+    EXPECT_EQ(locations.cell(0, stamps).substr(0, 19),
+              std::to_string(kFirstStampSec) + "000000000");
+    const auto graphml = dir / (encoding + ".graphml");
+    ASSERT_EQ(placedb({"export", map.string(), graphml.string()}, dir).exit_code, 0);
+    EXPECT_NE(bytesOf(graphml).find("<data key=\"stamps_ns\">" + std::to_string(kFirstStampSec)),
+              std::string::npos);
   }
 }
 

@@ -75,6 +75,18 @@ std::string framesText(const GraphLocation& location) {
   return text;
 }
 
+// The frames' stamps in the order of framesText ("-" for a frame without one); empty when no
+// frame of the location has a stamp.
+std::string stampsText(const GraphLocation& location) {
+  std::string text;
+  bool any = false;
+  for (const auto& f : location.frames) {
+    any = any || f.stamp_ns.has_value();
+    text += (text.empty() ? "" : " ") + (f.stamp_ns ? std::to_string(*f.stamp_ns) : "-");
+  }
+  return any ? text : std::string();
+}
+
 std::string scoreText(const GraphLink& link) {
   return link.score ? fmt::format("{}", *link.score) : std::string();
 }
@@ -86,10 +98,10 @@ void writeCsv(const MapGraph& graph, const std::filesystem::path& folder) {
     throw Error(ErrorCode::kIo, fmt::format("cannot create {}: {}", folder.string(), ec.message()));
   const auto locations_path = folder / "locations.csv";
   std::string locations;
-  locations += "location,session,tier,weight,frames\n";
+  locations += "location,session,tier,weight,frames,stamps_ns\n";
   for (const auto& l : graph.locations)
-    locations +=
-        fmt::format("{},{},{},{},{}\n", l.id, l.session_id, l.tier, l.weight, framesText(l));
+    locations += fmt::format("{},{},{},{},{},{}\n", l.id, l.session_id, l.tier, l.weight,
+                             framesText(l), stampsText(l));
   writeTextFile(locations_path, locations);
 
   const auto links_path = folder / "links.csv";
@@ -119,6 +131,7 @@ void writeGraphml(const MapGraph& graph, const std::filesystem::path& path) {
       "  <key id=\"tier\" for=\"node\" attr.name=\"tier\" attr.type=\"string\"/>\n"
       "  <key id=\"weight\" for=\"node\" attr.name=\"weight\" attr.type=\"long\"/>\n"
       "  <key id=\"frames\" for=\"node\" attr.name=\"frames\" attr.type=\"string\"/>\n"
+      "  <key id=\"stamps_ns\" for=\"node\" attr.name=\"stamps_ns\" attr.type=\"string\"/>\n"
       "  <key id=\"type\" for=\"edge\" attr.name=\"type\" attr.type=\"string\"/>\n"
       "  <key id=\"score\" for=\"edge\" attr.name=\"score\" attr.type=\"double\"/>\n"
       "  <key id=\"appearance_only\" for=\"edge\" attr.name=\"appearance_only\" "
@@ -130,11 +143,14 @@ void writeGraphml(const MapGraph& graph, const std::filesystem::path& path) {
       "  <key id=\"pose_inliers\" for=\"edge\" attr.name=\"pose_inliers\" "
       "attr.type=\"long\"/>\n"
       "  <graph id=\"placedb\" edgedefault=\"undirected\">\n";
-  for (const auto& l : graph.locations)
+  for (const auto& l : graph.locations) {
+    const std::string stamps = stampsText(l);
     out += fmt::format(
         "    <node id=\"n{}\"><data key=\"session\">{}</data><data key=\"tier\">{}</data>"
-        "<data key=\"weight\">{}</data><data key=\"frames\">{}</data></node>\n",
-        l.id, l.session_id, l.tier, l.weight, framesText(l));
+        "<data key=\"weight\">{}</data><data key=\"frames\">{}</data>{}</node>\n",
+        l.id, l.session_id, l.tier, l.weight, framesText(l),
+        stamps.empty() ? "" : fmt::format("<data key=\"stamps_ns\">{}</data>", stamps));
+  }
   for (const auto& k : graph.links) {
     std::string data = fmt::format("<data key=\"type\">{}</data>", k.type);
     if (k.score) data += fmt::format("<data key=\"score\">{}</data>", *k.score);
@@ -197,7 +213,8 @@ MapGraph readMapGraph(const std::string& map_path) {
 
   std::map<std::int64_t, GraphFrame> frame_of;  // frame id -> session and source index
   for (const auto& s : store.sessions())
-    for (const auto& f : store.frames(s.id)) frame_of[f.id] = {f.session_id, f.source_index};
+    for (const auto& f : store.frames(s.id))
+      frame_of[f.id] = {f.session_id, f.source_index, f.stamp_ns};
 
   const PoseOfPair poses = storedPoses(store);
   MapGraph graph;

@@ -25,6 +25,7 @@ namespace placedb::cli {
 struct GraphFrame {
   std::int64_t session_id = 0;
   std::int64_t source_index = 0;
+  std::optional<std::int64_t> stamp_ns;  // the source's stamp (a bag message's header.stamp)
 };
 
 struct GraphLocation {
