@@ -138,6 +138,12 @@ TEST(CliRealSequence, CountsAgreeAcrossMapInfoAndLog) {
       text.out.find(fmt::format("frames 84 ({} bad), accepted loop closures {}", bad, accepted)),
       std::string::npos)
       << text.out;
+  // The report without ground truth counts the same closures.
+  auto report = placedb({"report", map.string(), log.string(), "--out", (dir / "r").string()}, dir);
+  ASSERT_EQ(report.exit_code, 0) << describe(report);
+  EXPECT_NE(bytesOf(dir / "r" / "index.html")
+                .find(fmt::format("<h2>Accepted loop closures: {}</h2>", accepted)),
+            std::string::npos);
 }
 
 TEST(CliRealSequence, MapEvalInfoQueryOnRtabmapSamples) {

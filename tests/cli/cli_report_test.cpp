@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
 #include <regex>
 
 #include "cli_scratch.h"
@@ -94,6 +96,78 @@ TEST_F(ReportTest, ThumbnailsOfTheLogsSession) {
   ASSERT_EQ(other.exit_code, 0) << describe(other);
   EXPECT_NE(bytesOf(dir_ / "second" / "index.html").find("title=\"" + copy.string()),
             std::string::npos);
+}
+
+// Without ground truth: exit 0, the closures shown without a verdict, no figure that would call
+// them right or wrong.
+TEST_F(ReportTest, WithoutGroundTruthTheClosuresAreShownUnjudged) {
+  const fs::path out = dir_ / "unjudged";
+  auto r = placedb({"report", map_.string(), log_.string(), "--out", out.string()}, dir_);
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_NE(r.out.find("not judged"), std::string::npos) << r.out;
+  const std::string page = bytesOf(out / "index.html");
+  std::smatch accepted;
+  ASSERT_TRUE(std::regex_search(page, accepted, std::regex("Accepted loop closures: (\\d+)")));
+  EXPECT_GT(std::stoul(accepted[1]), 0u);
+  EXPECT_EQ(countOf(page, "<div class=\"pair unjudged\">"),
+            std::min<std::size_t>(std::stoul(accepted[1]), 48 + 24));
+  EXPECT_EQ(countOf(page, "pair wrong"), 0u);
+  EXPECT_EQ(countOf(page, "pair right"), 0u);
+  EXPECT_EQ(page.find("precision_recall.png"), std::string::npos);
+  EXPECT_EQ(page.find("loop_matrix.png"), std::string::npos);
+  EXPECT_NE(page.find("time_by_stage.png"), std::string::npos);
+  EXPECT_EQ(countOf(page, "class=\"missing\""), 0u);
+}
+
+// A second session over the same images closes loops on the first: the report of its log shows
+// them, with the first session's thumbnails, whether or not a ground truth is given.
+TEST_F(ReportTest, ClosuresToOtherSessionsAreListed) {
+  const fs::path log2 = dir_ / "second.csv";
+  auto second = placedb({"map", map_.string(), (data_ / "frames.txt").string(), "--log",
+                         log2.string(), "--quiet", "--stop-after", "60"},
+                        dir_);
+  ASSERT_EQ(second.exit_code, 0) << describe(second);
+  for (const bool with_gt : {false, true}) {
+    const fs::path out = dir_ / (with_gt ? "second_gt" : "second");
+    std::vector<std::string> args = {"report", map_.string(), log2.string()};
+    if (with_gt) args.push_back(gt_.string());
+    args.insert(args.end(), {"--out", out.string()});
+    auto r = placedb(args, dir_);
+    ASSERT_EQ(r.exit_code, 0) << describe(r);
+    const std::string page = bytesOf(out / "index.html");
+    std::smatch others;
+    ASSERT_TRUE(std::regex_search(page, others, std::regex("Closures to other sessions: (\\d+)")))
+        << "with_gt " << with_gt;
+    EXPECT_GT(std::stoul(others[1]), 10u);
+    EXPECT_NE(page.find("&rarr; session 1 frame "), std::string::npos);
+    EXPECT_EQ(countOf(page, "class=\"missing\""), 0u);
+  }
+}
+
+// Frames of a video: their thumbnails are read from the video at the stored frame index.
+TEST_F(ReportTest, ThumbnailsOfAVideoSource) {
+  const fs::path video = dir_ / "tour.avi";
+  {
+    cv::VideoWriter writer(video.string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10,
+                           cv::Size(240, 180));
+    ASSERT_TRUE(writer.isOpened());
+    for (int i = 0; i < 200; ++i) {
+      char name[32];
+      std::snprintf(name, sizeof name, "images/%06d.png", i);
+      writer.write(cv::imread((data_ / name).string()));
+    }
+  }
+  const fs::path map = dir_ / "video.placedb", log = dir_ / "video.csv";
+  ASSERT_EQ(
+      placedb({"map", map.string(), video.string(), "--log", log.string(), "-q"}, dir_).exit_code,
+      0);
+  const fs::path out = dir_ / "video_report";
+  auto r = placedb({"report", map.string(), log.string(), "--out", out.string()}, dir_);
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_EQ(r.err.find("could not be read"), std::string::npos) << r.err;
+  const std::string page = bytesOf(out / "index.html");
+  EXPECT_GT(countOf(page, "<div class=\"pair unjudged\">"), 0u);
+  EXPECT_EQ(countOf(page, "class=\"missing\""), 0u);
 }
 
 // A page the disk has no room for is exit 7 and leaves no file, whole or partial.

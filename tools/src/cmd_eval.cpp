@@ -11,7 +11,7 @@
 namespace placedb::cli {
 
 EvalOutcome runEvaluation(const EvalRequest& request) {
-  GroundTruth gt = loadGroundTruth(request.gt);
+  GroundTruth gt = request.gt.empty() ? GroundTruth{} : loadGroundTruth(request.gt);
   CsvTable log = readCsv(request.log);
   EvalOutcome outcome;
   outcome.evaluation = evaluate(log, gt, request.window);

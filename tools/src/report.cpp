@@ -18,6 +18,7 @@
 #include "base64.h"
 #include "cmd_eval.h"
 #include "frame_log.h"
+#include "image_source.h"
 #include "placedb/error.h"
 #include "placedb/storage/map_store.h"
 #include "report_page.h"
@@ -106,11 +107,9 @@ fs::path locateImage(const std::string& stored, const fs::path& source) {
 }
 
 // A JPEG data: URI of the image shrunk to the thumbnail width; empty when it cannot be read.
-std::string thumbnail(const fs::path& path) {
-  if (path.empty()) return {};
+std::string thumbnailOf(cv::Mat image) {
+  if (image.empty()) return {};
   try {
-    cv::Mat image = cv::imread(path.string(), cv::IMREAD_COLOR);
-    if (image.empty()) return {};
     const double scale = static_cast<double>(kThumbnailWidth) / image.cols;
     if (scale < 1.0)
       cv::resize(image, image, cv::Size(), scale, scale, cv::INTER_AREA);  // no aliasing
@@ -121,6 +120,54 @@ std::string thumbnail(const fs::path& path) {
     return {};
   }
 }
+
+// A frame's image as the map stores its path: an image file (found as locateImage finds it), or a
+// frame of a video ("VIDEO#INDEX") or bag ("BAG#TOPIC#INDEX"), read from the source at its index.
+// Sources stay open between frames: a report asks one video for many.
+class FrameImages {
+ public:
+  cv::Mat read(const std::string& stored, const fs::path& session_source) {
+    const fs::path file = locateImage(stored, session_source);
+    if (!file.empty()) {
+      try {
+        return cv::imread(file.string(), cv::IMREAD_COLOR);
+      } catch (const cv::Exception&) {
+        return {};
+      }
+    }
+    const auto first = stored.find('#'), last = stored.rfind('#');
+    if (first == std::string::npos) return {};
+    SourceOptions options;
+    if (last != first) options.topic = stored.substr(first + 1, last - first - 1);
+    char* end = nullptr;
+    const long long index = std::strtoll(stored.c_str() + last + 1, &end, 10);
+    if (*end != '\0' || index < 0) return {};
+    const std::string key = stored.substr(0, last);
+    try {
+      // A video seeks forward only: an earlier frame reopens it.
+      Open& open = sources_[key];
+      if (!open.source || index < open.next) {
+        open.source = ImageSource::open(stored.substr(0, first), options);
+        open.next = 0;
+      }
+      open.source->seek(index);
+      SourceFrame frame;
+      if (!open.source->read(frame) || frame.index != index) return {};
+      open.next = index + 1;
+      return frame.image;
+    } catch (const std::exception&) {  // the source moved or cannot be read: a grey box
+      sources_.erase(key);
+      return {};
+    }
+  }
+
+ private:
+  struct Open {
+    std::unique_ptr<ImageSource> source;
+    std::int64_t next = 0;  // the index the next read() gives
+  };
+  std::map<std::string, Open> sources_;
+};
 
 // The session in the log's first row; nullopt for a log without the column (the bare format).
 std::optional<std::int64_t> sessionOfLog(const fs::path& log) {
@@ -187,24 +234,47 @@ Gallery closureGallery(const Evaluation& evaluation, const GroundTruth& gt, std:
   gallery.wrong_total = gallery.wrong.size();
   gallery.right_total = gallery.right.size();
   if (gallery.wrong.size() > max_wrong) gallery.wrong.resize(max_wrong);
-  if (gallery.right.size() > max_right) {
-    // Evenly spread, first and last included, so the sample covers the whole run.
-    std::vector<GalleryEntry> sample;
-    const std::size_t n = gallery.right.size();
-    for (std::size_t k = 0; k < max_right; ++k) {
-      const std::size_t i = max_right == 1 ? 0 : k * (n - 1) / (max_right - 1);
-      sample.push_back(gallery.right[i]);
-    }
-    gallery.right = std::move(sample);
-  }
+  gallery.right = spreadSample(std::move(gallery.right), max_right);
   return gallery;
+}
+
+std::vector<GalleryEntry> spreadSample(std::vector<GalleryEntry> entries, std::size_t n) {
+  if (entries.size() <= n) return entries;
+  std::vector<GalleryEntry> sample;
+  const std::size_t size = entries.size();
+  for (std::size_t k = 0; k < n; ++k)
+    sample.push_back(entries[n == 1 ? 0 : k * (size - 1) / (n - 1)]);
+  return sample;
+}
+
+std::vector<GalleryEntry> otherSessionClosures(const CsvTable& log) {
+  std::vector<GalleryEntry> out;
+  const int frame = log.column("frame"), accepted = log.column("accepted"),
+            same = log.column("candidate_frames"), other = log.column("other_candidates"),
+            score = log.column("score");
+  if (other < 0) return out;
+  for (std::size_t r = 0; r < log.rows.size(); ++r) {
+    const std::string& others = log.cell(r, other);
+    if (log.cell(r, accepted) != "1" || !log.cell(r, same).empty() || others.empty()) continue;
+    // "SESSION:INDEX SESSION:INDEX ...": the first is the best candidate.
+    long long session = 0, index = 0;
+    if (std::sscanf(others.c_str(), "%lld:%lld", &session, &index) != 2) continue;
+    GalleryEntry e;
+    e.frame = std::strtoll(log.cell(r, frame).c_str(), nullptr, 10);
+    e.matched = index;
+    e.matched_session = session;
+    e.score = std::strtod(log.cell(r, score).c_str(), nullptr);
+    out.push_back(e);
+  }
+  return out;
 }
 
 ReportSummary writeReport(const ReportRequest& request) {
   // Every refusal comes before DIR is touched.
   requireReadableFile(request.map, "map");
   requireReadableFile(request.log, "log");
-  requireReadableFile(request.gt, "ground truth");
+  const bool judged = !request.gt.empty();
+  if (judged) requireReadableFile(request.gt, "ground truth");
   requireWritableFolder(request.out);
 
   storage::MapStore store(request.map.string(), storage::OpenMode::kReadOnly);
@@ -220,9 +290,14 @@ ReportSummary writeReport(const ReportRequest& request) {
         wanted ? fmt::format("map {} has no session {}{}", request.map.string(), *wanted,
                              request.session ? "" : " (the session of the log's rows)")
                : fmt::format("map {} has no session: map a sequence first", request.map.string()));
-  std::map<std::int64_t, std::string> image_of;  // source index -> stored path
-  for (const auto& frame : store.frames(session->id))
-    image_of[frame.source_index] = frame.source_path;
+  // (session, source index) -> stored path, for every session: closures reach earlier ones.
+  std::map<std::pair<std::int64_t, std::int64_t>, std::string> image_of;
+  std::map<std::int64_t, std::string> source_of;
+  for (const auto& s : store.sessions()) {
+    source_of[s.id] = s.source;
+    for (const auto& frame : store.frames(s.id))
+      image_of[{s.id, frame.source_index}] = frame.source_path;
+  }
 
   ScratchFolder scratch;
   EvalRequest eval;
@@ -233,40 +308,64 @@ ReportSummary writeReport(const ReportRequest& request) {
   eval.map_path = request.map.string();
   eval.session = session->id;
   const EvalOutcome outcome = runEvaluation(eval);
-  const GroundTruth gt = loadGroundTruth(request.gt);
+  const GroundTruth gt = judged ? loadGroundTruth(request.gt) : GroundTruth{};
 
   ReportPage page;
   page.map = request.map.string();
   page.log = request.log.string();
   page.gt = request.gt.string();
+  page.judged = judged;
   page.session = session->id;
   page.figures = outcome.evaluation.figures;
-  for (const auto& plot : outcome.plots)
+  for (const auto& plot : outcome.plots) {
+    // Without ground truth the figures that split closures into right and wrong say nothing.
+    if (!judged && (plot.file == "precision_recall.png" || plot.file == "score.png" ||
+                    plot.file == "loop_matrix.png"))
+      continue;
     page.plots.push_back(
         {plot.file, plot.what,
          "data:image/png;base64," + base64Encode(readBytes(scratch.path() / plot.file))});
+  }
 
   ReportSummary summary;
-  const Gallery gallery =
-      closureGallery(outcome.evaluation, gt, request.max_wrong, request.max_right);
+  // Without ground truth every accepted closure lands among the "wrong" ones: all of them are
+  // taken, then sampled over the run like the right ones.
+  const Gallery gallery = closureGallery(outcome.evaluation, gt,
+                                         judged ? request.max_wrong : SIZE_MAX, request.max_right);
   page.wrong_total = gallery.wrong_total;
   page.right_total = gallery.right_total;
-  std::map<std::int64_t, std::string> thumbnails;  // a frame matched often is encoded once
-  auto picture = [&](std::int64_t frame) -> ReportPage::Picture {
-    auto stored = image_of.find(frame);
+  std::map<std::pair<std::int64_t, std::int64_t>, std::string> thumbnails;  // encoded once
+  FrameImages images;
+  auto picture = [&](std::int64_t session_id, std::int64_t frame) -> ReportPage::Picture {
+    auto stored = image_of.find({session_id, frame});
     ReportPage::Picture p{frame, stored == image_of.end() ? std::string() : stored->second, {}};
-    auto cached = thumbnails.find(frame);
+    auto cached = thumbnails.find({session_id, frame});
     if (cached == thumbnails.end())
-      cached = thumbnails.emplace(frame, thumbnail(locateImage(p.path, session->source))).first;
+      cached = thumbnails
+                   .emplace(std::pair(session_id, frame),
+                            thumbnailOf(images.read(p.path, source_of[session_id])))
+                   .first;
     p.uri = cached->second;
     if (p.uri.empty()) ++summary.missing_images;
     return p;
   };
-  for (const auto* entries : {&gallery.wrong, &gallery.right})
-    for (const auto& e : *entries) {
-      ReportPage::Pair pair{e, picture(e.frame), picture(e.matched)};
-      (e.right ? page.right : page.wrong).push_back(std::move(pair));
-    }
+  auto pair = [&](const GalleryEntry& e) {
+    return ReportPage::Pair{
+        e, picture(session->id, e.frame),
+        picture(e.matched_session ? e.matched_session : session->id, e.matched)};
+  };
+  if (judged) {
+    for (const auto& e : gallery.wrong) page.wrong.push_back(pair(e));
+    for (const auto& e : gallery.right) page.right.push_back(pair(e));
+  } else {
+    page.unjudged_total = gallery.wrong_total;
+    for (const auto& e : spreadSample(gallery.wrong, request.max_wrong + request.max_right))
+      page.unjudged.push_back(pair(e));
+  }
+  const auto others = otherSessionClosures(readCsv(request.log));
+  page.other_sessions_total = others.size();
+  for (const auto& e : spreadSample(others, request.max_right))
+    page.other_sessions.push_back(pair(e));
 
   std::error_code ec;
   fs::create_directories(request.out, ec);
@@ -278,6 +377,7 @@ ReportSummary writeReport(const ReportRequest& request) {
   summary.figures = page.plots.size();
   summary.wrong_shown = page.wrong.size();
   summary.right_shown = page.right.size();
+  summary.unjudged_shown = page.unjudged.size() + page.other_sessions.size();
   return summary;
 }
 

@@ -21,6 +21,7 @@ figcaption { color: #555; font-size: 0.9em; }
 .pairs { display: flex; flex-wrap: wrap; gap: 12px; }
 .pair { border: 2px solid #2ca02c; padding: 4px; font-size: 0.85em; }
 .pair.wrong { border-color: #d62728; }
+.pair.unjudged { border-color: #1f77b4; }
 .pair .images { display: flex; gap: 4px; }
 .pair .images div { width: 200px; }
 .pair img { width: 200px; display: block; }
@@ -83,17 +84,39 @@ std::string truthText(const GalleryEntry& e) {
   return "ground truth: " + frames;
 }
 
-std::string pairsHtml(const std::vector<ReportPage::Pair>& pairs) {
+// `judged`: a ground truth gave each closure a verdict (a green or red frame, the truth below).
+std::string pairsHtml(const std::vector<ReportPage::Pair>& pairs, bool judged) {
   std::string html = "<div class=\"pairs\">\n";
   for (const auto& p : pairs) {
     const GalleryEntry& e = p.closure;
+    const std::string matched =
+        e.matched_session ? fmt::format("session {} frame {}", e.matched_session, e.matched)
+                          : fmt::format("frame {}", e.matched);
     html += fmt::format(
         "<div class=\"pair {}\"><div class=\"images\">{}{}</div>"
-        "<div>frame {} &rarr; frame {}, score {:.3f}{}</div></div>\n",
-        e.right ? "right" : "wrong", pictureHtml(p.query), pictureHtml(p.matched), e.frame,
-        e.matched, e.score, e.right ? "" : "<br>" + htmlEscape(truthText(e)));
+        "<div>frame {} &rarr; {}, score {:.3f}{}</div></div>\n",
+        !judged   ? "unjudged"
+        : e.right ? "right"
+                  : "wrong",
+        pictureHtml(p.query), pictureHtml(p.matched), e.frame, matched, e.score,
+        !judged || e.right ? "" : "<br>" + htmlEscape(truthText(e)));
   }
   return html + "</div>\n";
+}
+
+// What a run says without ground truth: its length, closures and time.
+std::string runTable(const EvalFigures& f, std::size_t closures) {
+  std::string html =
+      "<table class=\"scores\"><tr><th>figure</th><th>value</th><th>meaning</th></tr>\n";
+  const auto row = [&](const std::string& key, const std::string& value, const char* meaning) {
+    html += fmt::format("<tr><td>{}</td><td class=\"value\">{}</td><td>{}</td></tr>\n", key, value,
+                        meaning);
+  };
+  row("frames", std::to_string(f.frames), "frames in the log");
+  row("accepted_closures", std::to_string(closures), "frames whose loop closure was accepted");
+  if (f.time_ms_mean) row("time_ms_mean", fmt::format("{:.2f}", *f.time_ms_mean), "ms a frame");
+  if (f.time_ms_p99) row("time_ms_p99", fmt::format("{:.2f}", *f.time_ms_p99), "99th percentile");
+  return html + "</table>\n";
 }
 
 }  // namespace
@@ -104,15 +127,21 @@ std::string reportHtml(const ReportPage& page) {
       "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
       "<title>placedb report: {}</title>\n<style>{}</style>\n<script>{}</script>\n</head>\n"
       "<body>\n<h1>placedb report</h1>\n"
-      "<p class=\"inputs\">map <code>{}</code> (session {}), log <code>{}</code>, ground truth "
-      "<code>{}</code>, window {} frames.</p>\n<p id=\"loaded\"></p>\n",
+      "<p class=\"inputs\">map <code>{}</code> (session {}), log <code>{}</code>, {}.</p>\n"
+      "<p id=\"loaded\"></p>\n",
       htmlEscape(page.log), kStyle, kScript, htmlEscape(page.map), page.session,
-      htmlEscape(page.log), htmlEscape(page.gt), f.window);
+      htmlEscape(page.log),
+      page.judged ? fmt::format("ground truth <code>{}</code>, window {} frames",
+                                htmlEscape(page.gt), f.window)
+                  : std::string("no ground truth: closures are shown without a verdict"));
 
-  html +=
-      "<h2>Scores</h2>\n<p>As <code>placedb eval</code> and <code>score_loops.py</code> "
-      "compute them.</p>\n" +
-      scoreTable(f);
+  if (page.judged)
+    html +=
+        "<h2>Scores</h2>\n<p>As <code>placedb eval</code> and <code>score_loops.py</code> "
+        "compute them.</p>\n" +
+        scoreTable(f);
+  else
+    html += "<h2>The run</h2>\n" + runTable(f, page.unjudged_total + page.other_sessions_total);
 
   html += "<h2>Figures</h2>\n<div class=\"figures\">\n";
   for (const auto& plot : page.plots)
@@ -122,22 +151,46 @@ std::string reportHtml(const ReportPage& page) {
         htmlEscape(plot.file), htmlEscape(plot.what));
   html += "</div>\n";
 
-  html +=
-      "<h2>Accepted loop closures</h2>\n<p>Each pair: the frame on the left, the frame the "
-      "engine matched it with on the right. Wrong ones (red frame) first, then right ones "
-      "(green).</p>\n";
-  html += fmt::format("<h3>Wrong: {}</h3>\n", page.wrong_total);
-  if (page.wrong_total == 0) html += "<p>None: every accepted closure is right.</p>\n";
-  if (page.wrong.size() < page.wrong_total)
+  if (page.judged) {
     html +=
-        fmt::format("<p>The first {} of {} are shown.</p>\n", page.wrong.size(), page.wrong_total);
-  html += pairsHtml(page.wrong);
-  html += fmt::format("<h3>Right: {}</h3>\n", page.right_total);
-  if (page.right.size() < page.right_total)
+        "<h2>Accepted loop closures</h2>\n<p>Each pair: the frame on the left, the frame the "
+        "engine matched it with on the right. Wrong ones (red frame) first, then right ones "
+        "(green).</p>\n";
+    html += fmt::format("<h3>Wrong: {}</h3>\n", page.wrong_total);
+    if (page.wrong_total == 0) html += "<p>None: every accepted closure is right.</p>\n";
+    if (page.wrong.size() < page.wrong_total)
+      html += fmt::format("<p>The first {} of {} are shown.</p>\n", page.wrong.size(),
+                          page.wrong_total);
+    html += pairsHtml(page.wrong, true);
+    html += fmt::format("<h3>Right: {}</h3>\n", page.right_total);
+    if (page.right.size() < page.right_total)
+      html += fmt::format(
+          "<p>A sample of {} of {}, evenly spread over the run (first and last included).</p>\n",
+          page.right.size(), page.right_total);
+    html += pairsHtml(page.right, true);
+  } else {
     html += fmt::format(
-        "<p>A sample of {} of {}, evenly spread over the run (first and last included).</p>\n",
-        page.right.size(), page.right_total);
-  html += pairsHtml(page.right);
+        "<h2>Accepted loop closures: {}</h2>\n<p>Each pair: the frame on the left, the frame "
+        "the engine matched it with on the right.{}</p>\n",
+        page.unjudged_total,
+        page.unjudged.size() < page.unjudged_total
+            ? fmt::format(" A sample of {}, evenly spread over the run (first and last "
+                          "included).",
+                          page.unjudged.size())
+            : "");
+    html += pairsHtml(page.unjudged, false);
+  }
+  if (page.other_sessions_total > 0) {
+    html += fmt::format(
+        "<h2>Closures to other sessions: {}</h2>\n<p>Frames of this session matched with "
+        "places of other sessions of the map; a ground truth of one sequence cannot judge them.{}"
+        "</p>\n",
+        page.other_sessions_total,
+        page.other_sessions.size() < page.other_sessions_total
+            ? fmt::format(" A sample of {}.", page.other_sessions.size())
+            : "");
+    html += pairsHtml(page.other_sessions, false);
+  }
   return html + "</body>\n</html>\n";
 }
 

@@ -32,6 +32,10 @@ struct ReportPage {
   };
   std::vector<Pair> wrong, right;
   std::size_t wrong_total = 0, right_total = 0;
+  // Without ground truth (`judged` false) every closure of the session is in `unjudged`.
+  bool judged = true;
+  std::vector<Pair> unjudged, other_sessions;
+  std::size_t unjudged_total = 0, other_sessions_total = 0;
 };
 
 // A whole page, styles and a small script included. The script counts the images that loaded
