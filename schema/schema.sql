@@ -230,7 +230,7 @@ FROM kd_nodes GROUP BY tree;
 -- Accepted loop closures that carry a relative pose (schema 7).
 CREATE VIEW v_loop_closure_poses AS
 SELECT h.frame_id, f.session_id, f.source_index, f.location_id, h.best_location_id,
-       h.pose_qw, h.pose_qx, h.pose_qy, h.pose_qz, h.pose_tx, h.pose_ty, h.pose_tz, h.pose_inliers
+       h.pose_qx, h.pose_qy, h.pose_qz, h.pose_qw, h.pose_tx, h.pose_ty, h.pose_tz, h.pose_inliers
 FROM hypotheses h JOIN frames f ON f.id = h.frame_id
 WHERE h.accepted = 1 AND h.pose_qw IS NOT NULL;
 

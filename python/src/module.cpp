@@ -179,6 +179,16 @@ std::size_t importVocabulary(const std::string& file, const std::string& map_pat
   return static_cast<std::size_t>(cli::inspectMap(map_path)["words"].get<std::int64_t>());
 }
 
+// A relative pose as Python sees it: the quaternion in x, y, z, w order, as everywhere else.
+py::object poseDict(const std::optional<storage::ClosurePose>& pose) {
+  if (!pose) return py::none();
+  py::dict d;
+  d["rotation"] = py::make_tuple(pose->qx, pose->qy, pose->qz, pose->qw);
+  d["translation"] = py::make_tuple(pose->tx, pose->ty, pose->tz);
+  d["inliers"] = pose->inliers;
+  return std::move(d);
+}
+
 void bindResults(py::module_& m) {
   py::class_<FrameRef>(m, "FrameRef", "One input frame that a location covers")
       .def_readonly("frame_id", &FrameRef::frame_id)
@@ -199,19 +209,10 @@ void bindResults(py::module_& m) {
       .def_readonly("inliers", &Hypothesis::inliers, "geometric check inliers, 0: no check")
       .def_readonly("matches", &Hypothesis::matches)
       .def_property_readonly(
-          "pose",
-          [](const Hypothesis& h) -> py::object {
-            if (!h.pose) return py::none();
-            const auto& p = *h.pose;
-            py::dict d;
-            d["rotation"] = py::make_tuple(p.qw, p.qx, p.qy, p.qz);
-            d["translation"] = py::make_tuple(p.tx, p.ty, p.tz);
-            d["inliers"] = p.inliers;
-            return std::move(d);
-          },
+          "pose", [](const Hypothesis& h) { return poseDict(h.pose); },
           "an accepted closure's relative pose when the map has intrinsics (fx fy cx cy): "
-          "{'rotation': (qw, qx, qy, qz), 'translation': unit (tx, ty, tz), 'inliers': n}; "
-          "None otherwise");
+          "{'rotation': (qx, qy, qz, qw), 'translation': unit (tx, ty, tz), 'inliers': n} "
+          "(quaternion x, y, z, w, as ROS and Eigen order it); None otherwise");
   py::class_<StageTimes>(m, "StageTimes", "Milliseconds per stage")
       .def_readonly("features", &StageTimes::features)
       .def_readonly("quantisation", &StageTimes::quantisation)
@@ -266,7 +267,11 @@ void bindResults(py::module_& m) {
       .def_readonly("code_similarity", &QueryMatch::code_similarity)
       .def_readonly("inliers", &QueryMatch::inliers, "the geometric check's, 0 when it did not run")
       .def_readonly("verified", &QueryMatch::verified, "the geometric check passed")
-      .def_readonly("frames", &QueryMatch::frames);
+      .def_readonly("frames", &QueryMatch::frames)
+      .def_property_readonly(
+          "pose", [](const QueryMatch& q) { return poseDict(q.pose); },
+          "a verified match's relative pose (the query's camera in the location's) when the map "
+          "and the location's session have intrinsics, as Hypothesis.pose; None otherwise");
   py::class_<QueryResult>(m, "QueryResult")
       .def_property_readonly(
           "verdict", [](const QueryResult& r) { return std::string(toString(r.verdict)); },

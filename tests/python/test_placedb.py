@@ -141,6 +141,15 @@ def test_closures_carry_a_pose_only_with_intrinsics(tmp_path):
                 continue
             assert abs(sum(q * q for q in p["rotation"]) - 1.0) < 1e-6
             assert p["inliers"] >= 5
+        # Seen again from the same place: x, y, z near 0 and w near 1 (x, y, z, w order).
+        still = next(p for p in poses if p is not None)
+        assert len(still["rotation"]) == 4
+        # A query of a mapped image on a map with intrinsics answers with the pose too.
+        with placedb.Map(path, read_only=True) as m:
+            found = m.query(scene(3))
+        assert found.verdict == "known"
+        assert found.matches[0].pose is not None
+        assert abs(found.matches[0].pose["rotation"][3]) > 0.99
 
 
 def test_vocabulary_export_and_import_both_formats(tmp_path):

@@ -98,6 +98,9 @@ struct QueryMatch {  // localisation: a stored location that resembles the query
   int inliers = 0;             // the geometric check's epipolar inliers (0 when it did not run)
   bool verified = false;       // the geometric check passed (geometry_rule)
   std::vector<FrameRef> frames;
+  // A verified match's relative pose (the query's camera in the location's) when the map's
+  // settings and the location's session both have intrinsics, as a closure's pose.
+  std::optional<storage::ClosurePose> pose;
 };
 
 // A query's answer: kKnown when its best match passed the geometric check, kUnknown when none

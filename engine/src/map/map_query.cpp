@@ -178,6 +178,7 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
         match.similarity = similarity(signature, Signature::fromWords(keypoints.words));
         match.inliers = g.inliers;
         match.verified = g.passed;
+        if (g.passed) match.pose = closurePose(id, g);
         ++result.checked;
       }
     };
