@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "cli_scratch.h"
@@ -65,6 +66,23 @@ TEST(CliRefusals, QueryAnswersEveryImageAfterAnUnusableOne) {
   EXPECT_EQ(r.err.rfind("placedb: error: ", 0), 0u) << r.err;
   EXPECT_NE(r.err.find("one.png"), std::string::npos) << r.err;
   EXPECT_NE(r.out.find(good + ":"), std::string::npos) << describe(r);
+}
+
+// A folder or a list file is as good to query as to map: each of its images is answered.
+TEST(CliRefusals, QueryTakesAFolderOrAListFile) {
+  auto seq = smallSequence(4);
+  auto dir = scratchDir("CliRefusals_query_folder");
+  auto map = (dir / "m.placedb").string();
+  ASSERT_EQ(placedb({"map", map, (seq / "frames.txt").string(), "-q"}, dir).exit_code, 0);
+  for (const fs::path& source : {seq / "images", seq / "frames.txt"}) {
+    auto r = placedb({"query", map, source.string(), "--json"}, dir);
+    ASSERT_EQ(r.exit_code, 0) << describe(r);
+    const auto answers = nlohmann::json::parse(r.out);
+    ASSERT_EQ(answers.size(), 4u) << source;
+    EXPECT_NE(answers[3]["image"].get<std::string>().find("000003.png"), std::string::npos);
+  }
+  fs::create_directories(dir / "empty");
+  expectCleanError(placedb({"query", map, (dir / "empty").string()}, dir), 3, "empty");
 }
 
 TEST(CliRefusals, VocabExportRefusesTheMapUnderAnyNameAndLeavesNoPartialFile) {

@@ -117,6 +117,10 @@ TEST(GraphExport, PosesTravelAndTheOthersAreAppearanceOnly) {
   EXPECT_NE(graphml.find("<data key=\"appearance_only\">false</data><data key=\"qx\">"),
             std::string::npos);
   EXPECT_NE(graphml.find("<data key=\"pose_inliers\">33</data>"), std::string::npos);
+  // Directed, a -> b as the pose is measured, and the node ids g2o gives its vertices.
+  EXPECT_NE(graphml.find("edgedefault=\"directed\""), std::string::npos);
+  EXPECT_NE(graphml.find("<node id=\"1\">"), std::string::npos);
+  EXPECT_NE(graphml.find("<edge source=\"1\" target=\"4\">"), std::string::npos);
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <fstream>
 
 #include "placedb/error.h"
+#include "placedb/options.h"
 #include "settings_input.h"
 #include "test_paths.h"
 
@@ -115,6 +116,20 @@ TEST(SettingsInput, HelpNamesNoLibraryPlacedbDoesNotUse) {
   const std::string help = settingsHelp();
   EXPECT_EQ(help.find("FLANN"), std::string::npos) << help;
   EXPECT_NE(help.find("kd_trees"), std::string::npos) << help;
+}
+
+// Every setting's default starts in one column, however long the longest key.
+TEST(SettingsInput, HelpColumnsLineUp) {
+  const std::string help = settingsHelp();
+  std::size_t column = std::string::npos;
+  for (const auto& info : Options::catalogue()) {
+    const auto at = help.find("\n  " + info.key + " ");
+    ASSERT_NE(at, std::string::npos) << info.key;
+    const std::size_t line = at + 1;
+    const std::size_t value = help.find_first_not_of(' ', line + 2 + info.key.size()) - line;
+    if (column == std::string::npos) column = value;
+    EXPECT_EQ(value, column) << info.key;
+  }
 }
 
 }  // namespace

@@ -42,12 +42,48 @@ nlohmann::json framesJson(const std::vector<FrameRef>& frames) {
   return list;
 }
 
+// The images an argument names, as `placedb map` reads them: a folder's images in natural order,
+// a list file's paths, or the image itself. A folder without images or an unreadable list is
+// one error (an empty result).
+std::vector<std::string> imagesOf(const std::string& argument, std::string& problem) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::is_directory(argument, ec)) {
+    std::vector<std::string> images, skipped;
+    listImageFolder(argument, images, skipped);
+    if (images.empty()) problem = "the folder holds no image";
+    return images;
+  }
+  if (fs::is_regular_file(argument, ec) && !hasImageExtension(argument) &&
+      !hasVideoExtension(argument)) {
+    try {
+      std::vector<std::string> paths = readListFile(argument);
+      if (paths.empty()) problem = "the list file holds no image path";
+      return paths;
+    } catch (const Error&) {
+      // Not a list after all (binary): read it as an image, which says what it is.
+    }
+  }
+  return {argument};
+}
+
 int runQuery(const QueryRequest& request) {
   Options options = storedOptions(request.map_path);
   auto map = Map::open(request.map_path, options, Map::Mode::kLocalisation);
   nlohmann::json out = nlohmann::json::array();
   int status = 0;
-  for (const auto& image_path : request.images) {
+  std::vector<std::string> images;
+  for (const auto& argument : request.images) {
+    std::string problem;
+    const std::vector<std::string> named = imagesOf(argument, problem);
+    if (!problem.empty()) {
+      printError(fmt::format("cannot read images of {}: {}", argument, problem));
+      status = exitCodeFor(ErrorCode::kIo);
+      out.push_back({{"image", argument}, {"error", problem}});
+    }
+    images.insert(images.end(), named.begin(), named.end());
+  }
+  for (const auto& image_path : images) {
     std::string problem;
     cv::Mat image = readImageFile(image_path, problem);
     if (image.empty()) {
@@ -70,14 +106,18 @@ int runQuery(const QueryRequest& request) {
     }
     if (request.json) {
       nlohmann::json matches = nlohmann::json::array();
-      for (const auto& m : result.matches)
-        matches.push_back({{"location", m.location_id},
-                           {"tier", storage::toString(m.tier)},
-                           {"similarity", m.similarity},
-                           {"code_similarity", m.code_similarity},
-                           {"inliers", m.inliers},
-                           {"verified", m.verified},
-                           {"frames", framesJson(m.frames)}});
+      for (const auto& m : result.matches) {
+        nlohmann::json match = {
+            {"location", m.location_id},     {"tier", storage::toString(m.tier)},
+            {"similarity", m.similarity},    {"code_similarity", m.code_similarity},
+            {"inliers", m.inliers},          {"verified", m.verified},
+            {"frames", framesJson(m.frames)}};
+        if (m.pose)  // x, y, z, w: the order of every placedb interface, ROS's and Eigen's
+          match["pose"] = {{"rotation_xyzw", {m.pose->qx, m.pose->qy, m.pose->qz, m.pose->qw}},
+                           {"translation", {m.pose->tx, m.pose->ty, m.pose->tz}},
+                           {"inliers", m.pose->inliers}};
+        matches.push_back(match);
+      }
       out.push_back({{"image", image_path},
                      {"verdict", toString(result.verdict)},
                      {"feature_count", result.feature_count},
@@ -116,7 +156,8 @@ Command addQueryCommand(CLI::App& parent) {
       parent.add_subcommand("query", "Localise images against a map without changing it");
   app->footer(
       "Compare each IMAGE with every location stored in MAP, in every memory tier, and say\n"
-      "whether it shows a known place. Candidates are the locations most like the image by\n"
+      "whether it shows a known place (an IMAGE may be a folder or a list file: its images,\n"
+      "read as `placedb map` reads them). Candidates are the locations most like the image by\n"
       "bag of words (short-term and working memory) and by place code (every tier, long-term\n"
       "memory included); each goes through the geometric check against its stored keypoints.\n"
       "Verdict: 'known' when the best candidate passes the check (geometry_rule),\n"
@@ -128,9 +169,11 @@ Command addQueryCommand(CLI::App& parent) {
       "or too large): it gets one error line naming it, and the others are still answered.\n\n"
       "Examples:\n"
       "  placedb query run.placedb photo.jpg\n"
-      "  placedb query run.placedb a.png b.png --top 3 --json");
+      "  placedb query run.placedb a.png b.png --top 3 --json\n"
+      "  placedb query run.placedb second_run/frames.txt --json");
   app->add_option("MAP", request->map_path, "map file")->required();
-  app->add_option("IMAGE", request->images, "images to localise")->required();
+  app->add_option("IMAGE", request->images, "images to localise (or folders, list files)")
+      ->required();
   app->add_option("--top,-k", request->top, "locations to print per image")
       ->check(CLI::PositiveNumber);
   app->add_flag("--json", request->json, "print one JSON array");

@@ -142,11 +142,11 @@ void writeGraphml(const MapGraph& graph, const std::filesystem::path& path) {
   out +=
       "  <key id=\"pose_inliers\" for=\"edge\" attr.name=\"pose_inliers\" "
       "attr.type=\"long\"/>\n"
-      "  <graph id=\"placedb\" edgedefault=\"undirected\">\n";
+      "  <graph id=\"placedb\" edgedefault=\"directed\">\n";
   for (const auto& l : graph.locations) {
     const std::string stamps = stampsText(l);
     out += fmt::format(
-        "    <node id=\"n{}\"><data key=\"session\">{}</data><data key=\"tier\">{}</data>"
+        "    <node id=\"{}\"><data key=\"session\">{}</data><data key=\"tier\">{}</data>"
         "<data key=\"weight\">{}</data><data key=\"frames\">{}</data>{}</node>\n",
         l.id, l.session_id, l.tier, l.weight, framesText(l),
         stamps.empty() ? "" : fmt::format("<data key=\"stamps_ns\">{}</data>", stamps));
@@ -165,7 +165,7 @@ void writeGraphml(const MapGraph& graph, const std::filesystem::path& path) {
         data += fmt::format("<data key=\"{}\">{}</data>", keys[i], values[i]);
       data += fmt::format("<data key=\"pose_inliers\">{}</data>", k.pose->inliers);
     }
-    out += fmt::format("    <edge source=\"n{}\" target=\"n{}\">{}</edge>\n", k.location_a,
+    out += fmt::format("    <edge source=\"{}\" target=\"{}\">{}</edge>\n", k.location_a,
                        k.location_b, data);
   }
   out += "  </graph>\n</graphml>\n";

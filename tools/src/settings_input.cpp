@@ -117,11 +117,20 @@ Options resolveOptions(const SettingsInput& input) {
 
 std::string settingsHelp() {
   std::string text = "Settings (--set KEY=VALUE; default and valid values):\n";
+  // Columns as wide as their longest entry, so a long key never pushes its row out of line.
+  std::size_t key = 0, value = 0, valid = 0, alias = 0;
+  for (const auto& info : Options::catalogue()) {
+    key = std::max(key, info.key.size());
+    value = std::max(value, info.default_value.size());
+    valid = std::max(valid, info.valid.size());
+  }
+  for (const auto& a : Options::aliases()) alias = std::max(alias, a.alias.size());
   for (const auto& info : Options::catalogue())
-    text += fmt::format("  {:<20} {:<10} {:<22} {}\n", info.key, info.default_value, info.valid,
-                        info.description);
+    text += fmt::format("  {:<{}}  {:<{}}  {:<{}}  {}\n", info.key, key, info.default_value, value,
+                        info.valid, valid, info.description);
   text += "\nRTAB-Map parameter names accepted for the setting that means the same:\n";
-  for (const auto& a : Options::aliases()) text += fmt::format("  {:<26} {}\n", a.alias, a.key);
+  for (const auto& a : Options::aliases())
+    text += fmt::format("  {:<{}}  {}\n", a.alias, alias, a.key);
   return text;
 }
 
