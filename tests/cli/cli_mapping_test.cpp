@@ -308,6 +308,26 @@ TEST(CliRealSequence, MapEvalInfoQueryOnRtabmapSamples) {
   EXPECT_NE(partly.out.find(list[30]), std::string::npos) << partly.out;
 }
 
+// A run stopped early says where it stands in the source, not only in its own count; eval's
+// nan and None (kept byte for byte as score_loops.py prints them) are explained on stderr.
+TEST(CliSyntheticSequence, ProgressTellsThePlaceInTheSourceAndEvalExplainsNan) {
+  auto seq = smallSequence(12);
+  auto dir = scratchDir("CliSynthetic_progress");
+  const auto log = dir / "run.csv";
+  auto r = placedb({"map", (dir / "m.placedb").string(), (seq / "frames.txt").string(),
+                    "--stop-after", "5", "--log", log.string()},
+                   dir);
+  ASSERT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_NE(r.err.find("5/5 frames"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("frame 4 of 12"), std::string::npos) << r.err;
+  std::ofstream(dir / "no_loops.txt") << "# no revisits\n";
+  auto e = placedb({"eval", log.string(), (dir / "no_loops.txt").string()}, dir);
+  ASSERT_EQ(e.exit_code, 0) << describe(e);
+  EXPECT_NE(e.out.find("recall_at_100_precision: nan"), std::string::npos) << e.out;
+  EXPECT_NE(e.err.find("placedb: note: recall_at_100_precision is nan"), std::string::npos)
+      << e.err;
+}
+
 TEST(CliSyntheticSequence, SplitRunEqualsStraightRun) {
   auto seq = demoSequence();
   auto dir = scratchDir("CliSynthetic_split");

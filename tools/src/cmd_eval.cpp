@@ -1,9 +1,11 @@
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cstdio>
 
 #include "cmd_eval.h"
 #include "commands.h"
+#include "exit_codes.h"
 #include "frame_log.h"
 #include "loop_matrix.h"
 #include "run_series.h"
@@ -33,7 +35,7 @@ Command addEvalCommand(CLI::App& parent) {
       "Score a per-frame log (written by `placedb map --log`) against ground-truth pairs, with\n"
       "the definitions of the reference scorer score_loops.py: recall at 100% precision (R@100P),\n"
       "precision and recall of the accepted closures, time per frame. Without --json the output\n"
-      "is line for line what score_loops.py prints.\n\n"
+      "is line for line what score_loops.py prints (nan and None included: stderr says why).\n\n"
       "GT holds lines `q r` (0-based, q > r: frame q revisits frame r); '#' starts a comment.\n"
       "A hypothesis is right when one of its candidate frames is within W frames of a\n"
       "ground-truth reference.\n\n"
@@ -57,6 +59,16 @@ Command addEvalCommand(CLI::App& parent) {
             EvalOutcome outcome = runEvaluation(*request);
             const EvalFigures& figures = outcome.evaluation.figures;
             std::fputs((*json ? figuresJson(figures) : figuresText(figures)).c_str(), stdout);
+            // The figures stay byte for byte the reference scorer's (nan, None); what they mean
+            // goes to stderr, where no script comparing outputs reads it.
+            if (std::isnan(figures.recall_at_100_precision))
+              printNote(
+                  "recall_at_100_precision is nan: the ground truth has no loop frame "
+                  "among the log's frames");
+            if (!figures.accepted_precision)
+              printNote("accepted_precision is None: the run accepted no loop closure");
+            if (!figures.accepted_recall)
+              printNote("accepted_recall is None: the ground truth has no loop frame");
             if (!*json)
               for (const auto& plot : outcome.plots)
                 std::fputs(

@@ -47,6 +47,10 @@ void printError(const std::string& message) {
   std::fputs(fmt::format("placedb: error: {}\n", oneLine(message)).c_str(), stderr);
 }
 
+void printNote(const std::string& message) {
+  std::fputs(fmt::format("placedb: note: {}\n", oneLine(message)).c_str(), stderr);
+}
+
 void printWarning(const std::string& message) {
   std::fputs(fmt::format("placedb: warning: {}\n", oneLine(message)).c_str(), stderr);
 }

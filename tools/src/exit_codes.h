@@ -18,5 +18,7 @@ std::string exitCodeTable();
 // Prints "placedb: error: <message>" as one line on stderr (newlines in the message are folded).
 void printError(const std::string& message);
 void printWarning(const std::string& message);
+// "placedb: note: <message>": what a figure means, not a problem.
+void printNote(const std::string& message);
 
 }  // namespace placedb::cli

@@ -219,10 +219,10 @@ MappingSummary runMapping(const MappingRequest& request) {
     }
     if (log) log->write(result);
     if (progress)
-      progress->update(
-          {frame.index, summary.locations_created, static_cast<std::int64_t>(result.wm_size),
-           summary.loop_closures,
-           source->kind() == "live" ? std::optional(source->dropped()) : std::nullopt});
+      progress->update({frame.index, summary.locations_created,
+                        static_cast<std::int64_t>(result.wm_size), summary.loop_closures,
+                        source->kind() == "live" ? std::optional(source->dropped()) : std::nullopt,
+                        source->size()});
   }
   summary.dropped = source->dropped();
   map->close();

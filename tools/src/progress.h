@@ -15,6 +15,9 @@ struct ProgressSample {
   std::int64_t wm_size = 0;
   std::int64_t loop_closures = 0;       // accepted by this run
   std::optional<std::int64_t> dropped;  // a live source's dropped frames
+  // Frames in the whole source, when known: "frame 39 of 84" tells where a run that stops early
+  // (--stop-after) or resumes stands in the source, which the run's own count does not.
+  std::optional<std::int64_t> source_size;
 };
 
 class ProgressReporter {
