@@ -18,6 +18,10 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// A network camera answers within seconds or is down; FFmpeg's own defaults wait far longer.
+constexpr int kOpenTimeoutMs = 10000;
+constexpr int kReadTimeoutMs = 5000;
+
 class LiveSource : public ImageSource {
  public:
   LiveSource(const std::string& source, double max_fps) : name_(source), max_fps_(max_fps) {
@@ -29,8 +33,10 @@ class LiveSource : public ImageSource {
       opened = capture_.open(std::stoi(m[1]), cv::CAP_V4L2);
     else if (text.rfind("/dev/", 0) == 0)
       opened = capture_.open(text, cv::CAP_V4L2);
-    else
-      opened = capture_.open(text, cv::CAP_FFMPEG);
+    else  // bounded waits: a stalled stream ends the source instead of hanging Ctrl-C's close
+      opened = capture_.open(text, cv::CAP_FFMPEG,
+                             {cv::CAP_PROP_OPEN_TIMEOUT_MSEC, kOpenTimeoutMs,
+                              cv::CAP_PROP_READ_TIMEOUT_MSEC, kReadTimeoutMs});
     if (!opened) throw Error(ErrorCode::kIo, fmt::format("cannot open live source {}", source));
     grabber_ = std::thread([this] { grab(); });
   }
