@@ -299,6 +299,17 @@ TEST(CliBags, WhatABagCannotGiveIsOneLineThatCreatesNothing) {
     sqlite3_close(db);
   }
   expectCleanError(placedb({"map", map, none.string()}, dir), 3, "no image topic");
+  // An image topic without a message, like a list without an image path.
+  {
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open((none / "none_0.db3").c_str(), &db), SQLITE_OK);
+    sqlite3_exec(db,
+                 "INSERT INTO topics VALUES (2, '/camera/image', 'sensor_msgs/msg/Image', "
+                 "'cdr', '');",
+                 nullptr, nullptr, nullptr);
+    sqlite3_close(db);
+  }
+  expectCleanError(placedb({"map", map, none.string()}, dir), 3, "holds no message");
   // A topic it does not hold, a topic of another type, a topic for a source that is no bag.
   const fs::path good = writeRos2Bag(seq, dir, "/camera/image", "bgr8");
   expectCleanError(placedb({"map", map, good.string(), "--topic", "/cam"}, dir), 2,

@@ -43,6 +43,9 @@ class BagImageSource : public ImageSource {
       last_time_ = time;
       count_ = i + 1;
     }
+    if (count_ == 0)  // as a list file without an image path: nothing to map
+      throw Error(ErrorCode::kIo,
+                  fmt::format("bag {} topic {} holds no message", canonical_, topic_.name));
     reader_->seek(0);
   }
 
