@@ -22,12 +22,14 @@ int run(int argc, char** argv) {
       "placedb {}: appearance-based loop-closure detection with a SQLite map.\n\n"
       "Typical use:\n"
       "  placedb map run.placedb images/ --log run.csv      map a folder, log every frame\n"
+      "  placedb map run.placedb run.bag --topic /cam/image a ROS bag (or camera:0, rtsp://)\n"
       "  placedb eval run.csv gt_pairs.txt --plots plots/   score the run, draw its figures\n"
-      "  placedb report run.placedb run.csv gt.txt --out r/ one HTML page: scores, figures,\n"
-      "                                                     thumbnails of the closures\n"
+      "  placedb report run.placedb run.csv --out r/        one HTML page: figures, thumbnails\n"
+      "                                                     of the closures (scores with a GT)\n"
       "  placedb query run.placedb photo.jpg                where was this photo taken?\n"
       "  placedb info run.placedb                           what the map holds\n"
-      "  placedb export run.placedb g.g2o --format g2o      graph for a pose-graph optimiser\n"
+      "  placedb check run.placedb                          is it sound? (pages, checksums)\n"
+      "  placedb export run.placedb g.g2o                   graph for a pose-graph optimiser\n"
       "  placedb demo --out demo-output                     all of it on a synthetic tour\n",
       PLACEDB_VERSION_STRING)};
   app.name("placedb");
