@@ -9,11 +9,11 @@
 
 #include "commands.h"
 #include "exit_codes.h"
+#include "map_summary.h"
 #include "placedb/error.h"
 #include "placedb/map.h"
 #include "placedb/options.h"
 #include "placedb/storage/map_check.h"
-#include "placedb/storage/map_store.h"
 
 namespace placedb::cli {
 namespace {
@@ -22,14 +22,9 @@ namespace {
 // when a map opens; opening it for localisation, as `query` does, runs them all without a write.
 std::string checkAsTheEngineLoads(const std::string& path) {
   try {
-    Options options;
-    {
-      storage::MapStore store(path, storage::OpenMode::kReadOnly);
-      const auto last = store.lastSession();
-      if (!last) return "";  // nothing mapped yet: no engine state to load
-      options = Options::fromStoredSettings(store.settings(last->id));
-    }
-    Map::open(path, options, Map::Mode::kLocalisation);
+    const auto options = lastSessionOptions(path);
+    if (!options) return "";  // nothing mapped yet: no engine state to load
+    Map::open(path, *options, Map::Mode::kLocalisation);
   } catch (const Error& e) {
     if (e.code() != ErrorCode::kMapRefused) throw;
     return e.what();

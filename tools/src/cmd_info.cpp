@@ -31,6 +31,13 @@ const char* linkName(storage::LinkType type) {
 
 }  // namespace
 
+std::optional<Options> lastSessionOptions(const std::string& path) {
+  storage::MapStore store(path, storage::OpenMode::kReadOnly);
+  const auto last = store.lastSession();
+  if (!last) return std::nullopt;
+  return Options::fromStoredSettings(store.settings(last->id));
+}
+
 nlohmann::json inspectMap(const std::string& path) {
   if (!std::filesystem::exists(path))
     throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", path));

@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "exit_codes.h"
 #include "image_source.h"
+#include "map_summary.h"
 #include "placedb/map.h"
 #include "placedb/storage/map_store.h"
 
@@ -24,12 +25,11 @@ struct QueryRequest {
 Options storedOptions(const std::string& map_path) {
   if (!std::filesystem::exists(map_path))
     throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", map_path));
-  storage::MapStore store(map_path, storage::OpenMode::kReadOnly);
-  auto last = store.lastSession();
-  if (!last)
+  auto options = lastSessionOptions(map_path);
+  if (!options)
     throw Error(ErrorCode::kInvalidArgument,
                 fmt::format("map {} has no session yet: map a sequence first", map_path));
-  return Options::fromStoredSettings(store.settings(last->id));
+  return *options;
 }
 
 nlohmann::json framesJson(const std::vector<FrameRef>& frames) {
