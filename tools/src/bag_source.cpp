@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <filesystem>
+#include <tuple>
 
 #include "placedb/error.h"
 
@@ -27,25 +28,21 @@ class BagImageSource : public ImageSource {
         topic_(std::move(topic)),
         kind_(*imageMessageKind(topic_.type)) {
     reader_->select(topic_.name);
-    std::vector<std::uint8_t> bytes;
-    std::int64_t time = 0;
-    // The record times of the first and last messages make the digest; the first message also
-    // shows whether placedb can read the topic's encoding at all.
-    for (std::int64_t i = 0; reader_->next(bytes, time); ++i) {
-      if (i == 0) {
-        first_time_ = time;
-        const DecodedImage first =
-            decodeImageMessage(bytes.data(), bytes.size(), kind_, reader_->wireFormat());
-        if (first.problem.rfind("unknown image encoding", 0) == 0)
-          throw Error(ErrorCode::kIo,
-                      fmt::format("bag {} topic {}: {}", canonical_, topic_.name, first.problem));
-      }
-      last_time_ = time;
-      count_ = i + 1;
-    }
+    count_ = topic_.messages;
     if (count_ == 0)  // as a list file without an image path: nothing to map
       throw Error(ErrorCode::kIo,
                   fmt::format("bag {} topic {} holds no message", canonical_, topic_.name));
+    // The record times of the first and last messages make the digest (from the index); the
+    // first message shows whether placedb can read the topic's encoding at all.
+    std::tie(first_time_, last_time_) = reader_->recordTimes();
+    std::int64_t time = 0;
+    if (reader_->next(bytes_, time)) {
+      const DecodedImage first =
+          decodeImageMessage(bytes_.data(), bytes_.size(), kind_, reader_->wireFormat());
+      if (first.problem.rfind("unknown image encoding", 0) == 0)
+        throw Error(ErrorCode::kIo,
+                    fmt::format("bag {} topic {}: {}", canonical_, topic_.name, first.problem));
+    }
     reader_->seek(0);
   }
 

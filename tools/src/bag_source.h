@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "image_message.h"
@@ -30,6 +31,9 @@ class BagReader {
   virtual void select(const std::string& topic) = 0;
   virtual void seek(std::int64_t index) = 0;
   virtual bool next(std::vector<std::uint8_t>& bytes, std::int64_t& record_time_ns) = 0;
+  // The record times (ns) of the selected topic's first and last messages, from the bag's index:
+  // no message is read.
+  virtual std::pair<std::int64_t, std::int64_t> recordTimes() const = 0;
 };
 
 // True for what ImageSource::open hands to openBag: a .bag or .db3 file, or a folder holding

@@ -42,6 +42,10 @@ class Ros1Bag : public BagReader {
     view_ = std::make_unique<rosbag::View>(bag_, rosbag::TopicQuery(topic));
     seek(0);
   }
+  std::pair<std::int64_t, std::int64_t> recordTimes() const override {
+    return {static_cast<std::int64_t>(view_->getBeginTime().toNSec()),
+            static_cast<std::int64_t>(view_->getEndTime().toNSec())};
+  }
   void seek(std::int64_t index) override {
     at_ = view_->begin();
     for (std::int64_t i = 0; i < index && at_ != view_->end(); ++i) ++at_;

@@ -68,6 +68,29 @@ class Ros2Bag : public BagReader {
     topic_ = topic;
     seek(0);
   }
+  std::pair<std::int64_t, std::int64_t> recordTimes() const override {
+    std::int64_t first = 0, last = 0;
+    bool any = false;
+    for (std::size_t f = 0; f < dbs_.size(); ++f) {
+      sqlite3_stmt* s = nullptr;
+      if (sqlite3_prepare_v2(dbs_[f],
+                             "SELECT min(m.timestamp), max(m.timestamp) FROM messages m JOIN "
+                             "topics t ON t.id = m.topic_id WHERE t.name = ?1",
+                             -1, &s, nullptr) != SQLITE_OK) {
+        sqlite3_finalize(s);
+        fail(dbs_[f], files_[f]);
+      }
+      sqlite3_bind_text(s, 1, topic_.c_str(), -1, SQLITE_TRANSIENT);
+      if (sqlite3_step(s) == SQLITE_ROW && sqlite3_column_type(s, 0) != SQLITE_NULL) {
+        const std::int64_t lo = sqlite3_column_int64(s, 0), hi = sqlite3_column_int64(s, 1);
+        first = any ? std::min(first, lo) : lo;
+        last = any ? std::max(last, hi) : hi;
+        any = true;
+      }
+      sqlite3_finalize(s);
+    }
+    return {first, last};
+  }
   void seek(std::int64_t index) override {
     file_ = 0;
     skip_ = index;
