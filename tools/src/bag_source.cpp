@@ -59,7 +59,7 @@ class BagImageSource : public ImageSource {
     const DecodedImage decoded =
         decodeImageMessage(bytes_.data(), bytes_.size(), kind_, reader_->wireFormat());
     frame.index = next_++;
-    frame.path = fmt::format("{}#{}#{}", canonical_, topic_.name, frame.index);
+    frame.path = framePathInSource(canonical_, topic_.name, frame.index);
     frame.image = decoded.image;
     frame.problem = decoded.problem;
     frame.stamp_ns = decoded.stamp_ns;

@@ -104,7 +104,7 @@ class VideoSource : public ImageSource {
     cv::Mat image;
     if (!capture_.read(image)) return false;
     frame.index = next_++;
-    frame.path = fmt::format("{}#{}", canonical_, frame.index);
+    frame.path = framePathInSource(canonical_, "", frame.index);
     frame.problem = image.empty() ? "empty video frame" : "";
     frame.image = image;
     return true;
@@ -127,6 +127,24 @@ void quietVideoLibraries() {
     return true;
   }();
   (void)done;
+}
+
+std::string framePathInSource(const std::string& source, const std::string& topic,
+                              std::int64_t index) {
+  return topic.empty() ? fmt::format("{}#{}", source, index)
+                       : fmt::format("{}#{}#{}", source, topic, index);
+}
+
+std::optional<FrameInSource> parseFramePathInSource(const std::string& path) {
+  const auto first = path.find('#'), last = path.rfind('#');
+  if (first == std::string::npos) return std::nullopt;
+  FrameInSource frame;
+  frame.source = path.substr(0, first);
+  if (last != first) frame.topic = path.substr(first + 1, last - first - 1);
+  char* end = nullptr;
+  frame.index = std::strtoll(path.c_str() + last + 1, &end, 10);
+  if (last + 1 == path.size() || *end != '\0' || frame.index < 0) return std::nullopt;
+  return frame;
 }
 
 bool naturalLess(const std::string& a, const std::string& b) {

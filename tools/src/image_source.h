@@ -59,6 +59,17 @@ class ImageSource {
   virtual std::string digest() const = 0;
 };
 
+// The path stored for a frame that is not a file of its own: "SOURCE#INDEX" for a video or a
+// live source, "SOURCE#TOPIC#INDEX" for a bag's topic (`topic` empty: none).
+std::string framePathInSource(const std::string& source, const std::string& topic,
+                              std::int64_t index);
+struct FrameInSource {
+  std::string source, topic;
+  std::int64_t index = 0;
+};
+// The parts of such a path; none for a path of another form (an image file's).
+std::optional<FrameInSource> parseFramePathInSource(const std::string& path);
+
 // FFmpeg and OpenCV print their own lines about a video or stream they cannot read; placedb's
 // error names the source instead (OPENCV_FFMPEG_LOGLEVEL set by the user is kept).
 void quietVideoLibraries();

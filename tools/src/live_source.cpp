@@ -69,7 +69,7 @@ class LiveSource : public ImageSource {
       arrived_cv_.wait_for(lock, std::chrono::milliseconds(100));
     if (!fresh_) return false;
     frame.index = taken_++;
-    frame.path = fmt::format("{}#{}", name_, frame.index);
+    frame.path = framePathInSource(name_, "", frame.index);
     frame.image = latest_;
     frame.problem = latest_.empty() ? "empty frame" : "";
     frame.stamp_ns = std::nullopt;

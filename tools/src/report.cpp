@@ -135,19 +135,17 @@ class FrameImages {
         return {};
       }
     }
-    const auto first = stored.find('#'), last = stored.rfind('#');
-    if (first == std::string::npos) return {};
+    const auto frame_in = parseFramePathInSource(stored);
+    if (!frame_in) return {};
     SourceOptions options;
-    if (last != first) options.topic = stored.substr(first + 1, last - first - 1);
-    char* end = nullptr;
-    const long long index = std::strtoll(stored.c_str() + last + 1, &end, 10);
-    if (*end != '\0' || index < 0) return {};
-    const std::string key = stored.substr(0, last);
+    options.topic = frame_in->topic;
+    const std::int64_t index = frame_in->index;
+    const std::string key = frame_in->source + "#" + frame_in->topic;
     try {
       // A video seeks forward only: an earlier frame reopens it.
       Open& open = sources_[key];
       if (!open.source || index < open.next) {
-        open.source = ImageSource::open(stored.substr(0, first), options);
+        open.source = ImageSource::open(frame_in->source, options);
         open.next = 0;
       }
       open.source->seek(index);
