@@ -115,6 +115,7 @@ TEST(Options, ComponentDefaultsAreTheOptionsDefaults) {
   EXPECT_EQ(v.t_nd2, vo.t_nd2);
   EXPECT_EQ(v.kd_trees, vo.kd_trees);
   EXPECT_EQ(v.checks, vo.checks);
+  EXPECT_EQ(v.threads, vo.threads);
 
   const BayesFilterSettings b, bo = toFilterSettings(o);
   EXPECT_EQ(b.prediction_sigma, bo.prediction_sigma);

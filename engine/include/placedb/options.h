@@ -110,6 +110,11 @@ struct Options {
   int temporal_radius = 2;              // links from the last closure that passed on its own
   int temporal_max_gap = 4;             // frames since that closure (1 = the previous frame's)
 
+  // --- running ---
+  // Worker threads of feature extraction and quantisation, 0 = one per hardware thread. The
+  // work is split so that results never depend on it: any value gives the same decisions.
+  int threads = 2;
+
   // --- camera intrinsics (optional) ---
   // The pinhole camera of the images as they are mapped, in pixels: all four or none (0 =
   // unknown). With them each accepted loop closure also stores its relative pose, from an

@@ -46,7 +46,7 @@ struct FeatureOptions {
   // SURF: worker threads for the Hessian layers, orientations and descriptors; results do not
   // depend on it. 0 = all hardware threads. The OpenCV extractors follow cv::setNumThreads()
   // instead. Range [0, 64].
-  int threads = 1;
+  int threads = Options().threads;
 
   // SIFT: OpenCV's contrastThreshold. Range (0, 1].
   double sift_contrast_threshold = 0.04;

@@ -12,7 +12,7 @@ FeatureOptions toFeatureOptions(const Options& o) {
   f.max_features = o.max_features;
   f.feature_target = o.feature_target;
   f.min_response = static_cast<float>(o.min_response);
-  f.threads = 1;  // the engine's threads go to the pipeline, and results never depend on them
+  f.threads = o.threads;
   return f;
 }
 
@@ -25,6 +25,7 @@ vocab::VocabularyOptions toVocabularyOptions(const Options& o) {
   v.t_nd2 = static_cast<float>(o.t_nd2);
   v.kd_trees = o.kd_trees;
   v.checks = o.kd_checks;
+  v.threads = o.threads;
   return v;
 }
 

@@ -55,7 +55,10 @@ void offerNeighbor(std::vector<Neighbor>* best, std::size_t k, Neighbor candidat
 
 KdForest::KdForest(const SlotStore* store, int trees, int leaf_size, std::uint64_t seed)
     : store_(store), dim_(store->dim()), leaf_size_(leaf_size), seed_(seed), trees_(trees) {
-  for (auto& tree : trees_) tree.nodes.emplace_back();  // every tree starts as one empty leaf
+  for (auto& tree : trees_) {  // every tree starts as one empty leaf
+    tree.nodes.emplace_back();
+    tree.buckets.emplace_back();
+  }
 }
 
 std::int32_t KdForest::leafOf(const Tree& tree, const float* v) const {
@@ -68,12 +71,12 @@ std::int32_t KdForest::leafOf(const Tree& tree, const float* v) const {
 }
 
 void KdForest::insert(std::uint32_t slot) {
-  if (seen_.size() < store_->slotCount()) seen_.resize(store_->slotCount(), 0);
   const float* v = store_->data(slot);
   for (std::uint32_t t = 0; t < trees_.size(); ++t) {
     const std::int32_t leaf = leafOf(trees_[t], v);
-    trees_[t].nodes[leaf].bucket.push_back(slot);
-    if (trees_[t].nodes[leaf].bucket.size() > std::size_t(leaf_size_)) trySplit(t, leaf);
+    auto& bucket = trees_[t].buckets[static_cast<std::size_t>(leaf)];
+    bucket.push_back(slot);
+    if (bucket.size() > std::size_t(leaf_size_)) trySplit(t, leaf);
   }
 }
 
@@ -102,8 +105,6 @@ void KdForest::BackgroundFill::finish() {
   ready_.notify_all();
   for (auto& thread : threads_) thread.join();
   threads_.clear();
-  if (forest_->seen_.size() < forest_->store_->slotCount())
-    forest_->seen_.resize(forest_->store_->slotCount(), 0);
 }
 
 void KdForest::BackgroundFill::work(std::size_t first_tree, std::size_t stride) {
@@ -118,8 +119,8 @@ void KdForest::BackgroundFill::work(std::size_t first_tree, std::size_t stride) 
     for (std::size_t t = first_tree; t < forest_->trees_.size(); t += stride) {
       Tree& tree = forest_->trees_[t];
       for (std::uint32_t slot : *run)
-        tree.nodes[static_cast<std::size_t>(forest_->leafOf(tree, forest_->store_->data(slot)))]
-            .bucket.push_back(slot);
+        tree.buckets[static_cast<std::size_t>(forest_->leafOf(tree, forest_->store_->data(slot)))]
+            .push_back(slot);
     }
   }
 }
@@ -135,7 +136,7 @@ void KdForest::remove(std::uint32_t slot) {
       const Node& n = tree.nodes[node];
       node = v[n.dim] < n.value ? n.left : n.right;
     }
-    auto& bucket = tree.nodes[node].bucket;
+    auto& bucket = tree.buckets[static_cast<std::size_t>(node)];
     auto it = std::find(bucket.begin(), bucket.end(), slot);
     if (it == bucket.end()) {
       throw Error(ErrorCode::kInternal, "kd-forest: removed point is not in its bucket");
@@ -153,9 +154,11 @@ std::int32_t KdForest::allocate(Tree& tree) {
     const std::int32_t id = tree.free.top();
     tree.free.pop();
     tree.nodes[static_cast<std::size_t>(id)] = Node{};
+    tree.buckets[static_cast<std::size_t>(id)].clear();
     return id;
   }
   tree.nodes.emplace_back();
+  tree.buckets.emplace_back();
   return static_cast<std::int32_t>(tree.nodes.size() - 1);
 }
 
@@ -163,6 +166,7 @@ void KdForest::release(Tree& tree, std::int32_t node) {
   Node& n = tree.nodes[static_cast<std::size_t>(node)];
   n = Node{};
   n.left = kFree;
+  std::vector<std::uint32_t>().swap(tree.buckets[static_cast<std::size_t>(node)]);
   tree.free.push(node);
 }
 
@@ -181,8 +185,8 @@ void KdForest::spliceOut(std::uint32_t tree_index, std::int32_t parent, std::int
   Tree& tree = trees_[tree_index];
   const std::int32_t sibling =
       tree.nodes[parent].left == child ? tree.nodes[parent].right : tree.nodes[parent].left;
-  Node moved = std::move(tree.nodes[sibling]);
-  tree.nodes[parent] = std::move(moved);
+  tree.nodes[parent] = tree.nodes[sibling];
+  tree.buckets[parent].swap(tree.buckets[sibling]);
   release(tree, child);
   release(tree, sibling);
   markChanged(tree, parent);
@@ -191,7 +195,7 @@ void KdForest::spliceOut(std::uint32_t tree_index, std::int32_t parent, std::int
 
 void KdForest::trySplit(std::uint32_t tree_index, std::int32_t node_index) {
   // Sort by word id so that the float sums below do not depend on the bucket's history.
-  std::vector<std::uint32_t> points = trees_[tree_index].nodes[node_index].bucket;
+  std::vector<std::uint32_t> points = trees_[tree_index].buckets[node_index];
   std::sort(points.begin(), points.end(),
             [&](std::uint32_t a, std::uint32_t b) { return store_->id(a) < store_->id(b); });
   const std::size_t n = points.size();
@@ -228,30 +232,93 @@ void KdForest::applySplit(std::uint32_t tree_index, std::int32_t node_index, std
   const std::int32_t right = allocate(tree);
   Node& node = tree.nodes[node_index];
   std::vector<std::uint32_t> bucket;
-  bucket.swap(node.bucket);
+  bucket.swap(tree.buckets[node_index]);
   node.left = left;
   node.right = right;
   node.dim = dim;
   node.value = value;
   for (std::uint32_t p : bucket) {
-    tree.nodes[store_->data(p)[dim] < value ? left : right].bucket.push_back(p);
+    tree.buckets[store_->data(p)[dim] < value ? left : right].push_back(p);
   }
   markChanged(tree, node_index);
+}
+
+namespace {
+
+// The points one search has compared: a small open-addressing set, so that searches keep no
+// state in the forest (several threads may search at once) and the marks stay in L1 cache.
+class VisitedSlots {
+ public:
+  VisitedSlots() : keys_(kInitial, 0), mask_(kInitial - 1) {}
+  // True when `slot` was not in the set (it is now).
+  bool insert(std::uint32_t slot) {
+    if (2 * (count_ + 1) > keys_.size()) grow();
+    return place(slot + 1);
+  }
+
+ private:
+  static constexpr std::size_t kInitial = 256;
+  std::size_t home(std::uint32_t key) const { return (key * 2654435761u) & mask_; }
+  bool place(std::uint32_t key) {
+    for (std::size_t i = home(key);; i = (i + 1) & mask_) {
+      if (keys_[i] == key) return false;
+      if (keys_[i] == 0) {
+        keys_[i] = key;
+        ++count_;
+        return true;
+      }
+    }
+  }
+  void grow() {
+    std::vector<std::uint32_t> old(keys_.size() * 2, 0);
+    old.swap(keys_);
+    mask_ = keys_.size() - 1;
+    count_ = 0;
+    for (std::uint32_t key : old)
+      if (key != 0) place(key);
+  }
+  std::vector<std::uint32_t> keys_;
+  std::size_t mask_;
+  std::size_t count_ = 0;
+};
+
+}  // namespace
+
+float squaredDistanceBelow(const float* a, const float* b, int dim, float bound) {
+  // The sum of squares in squaredDistance's order, checked every 16 dimensions: every partial
+  // sum is non-negative and float addition is monotone, so once the partial total exceeds the
+  // bound the full one does too, and stopping changes no comparison against the bound.
+  float s0 = 0, s1 = 0, s2 = 0, s3 = 0;
+  int i = 0;
+  while (i + 4 <= dim) {
+    const int block_end = std::min(dim - (dim - i) % 4, i + 16);
+    for (; i < block_end; i += 4) {
+      const float d0 = a[i] - b[i], d1 = a[i + 1] - b[i + 1];
+      const float d2 = a[i + 2] - b[i + 2], d3 = a[i + 3] - b[i + 3];
+      s0 += d0 * d0;
+      s1 += d1 * d1;
+      s2 += d2 * d2;
+      s3 += d3 * d3;
+    }
+    if (i + 4 <= dim && (s0 + s1) + (s2 + s3) > bound) return (s0 + s1) + (s2 + s3);
+  }
+  for (; i < dim; ++i) {
+    const float d = a[i] - b[i];
+    s0 += d * d;
+  }
+  return (s0 + s1) + (s2 + s3);
 }
 
 void KdForest::search(const float* query, std::size_t k, int checks,
                       std::vector<Neighbor>* out) const {
   out->clear();
   if (k == 0) return;
-  if (seen_.size() < store_->slotCount()) seen_.resize(store_->slotCount(), 0);
-  if (++query_stamp_ == 0) {  // wrapped: old marks could collide with the new stamp
-    std::fill(seen_.begin(), seen_.end(), 0);
-    query_stamp_ = 1;
-  }
   const float inf = std::numeric_limits<float>::infinity();
   auto worst = [&]() { return out->size() < k ? inf : out->back().dist2; };
   std::priority_queue<Branch, std::vector<Branch>, std::greater<Branch>> branches;
+  VisitedSlots visited;
   int compared = 0;
+  const std::size_t line_floats = 64 / sizeof(float);
 
   // Walks down from a node to its leaf, queueing the far side of every split on the way.
   auto descend = [&](std::uint32_t t, std::int32_t node, float bound) {
@@ -265,11 +332,19 @@ void KdForest::search(const float* query, std::size_t k, int checks,
       if (far_bound <= worst()) branches.push({far_bound, t, far_child});
       node = near_child;
     }
-    for (std::uint32_t slot : tree.nodes[node].bucket) {
-      if (seen_[slot] == query_stamp_) continue;
-      seen_[slot] = query_stamp_;
+    const auto& bucket = tree.buckets[static_cast<std::size_t>(node)];
+    // The bucket's descriptors are scattered over the store: asking for all of them before the
+    // first is needed overlaps their cache misses.
+    for (std::uint32_t slot : bucket) {
+      const float* v = store_->data(slot);
+      for (std::size_t f = 0; f < std::size_t(dim_); f += line_floats) __builtin_prefetch(v + f);
+    }
+    for (std::uint32_t slot : bucket) {
+      if (!visited.insert(slot)) continue;
       ++compared;
-      offerNeighbor(out, k, {squaredDistance(query, store_->data(slot), dim_), store_->id(slot)});
+      const float bound_now = worst();
+      const float d2 = squaredDistanceBelow(query, store_->data(slot), dim_, bound_now);
+      if (d2 <= bound_now) offerNeighbor(out, k, {d2, store_->id(slot)});
     }
   };
 

@@ -82,6 +82,9 @@ struct Neighbor {
 void offerNeighbor(std::vector<Neighbor>* best, std::size_t k, Neighbor candidate);
 
 float squaredDistance(const float* a, const float* b, int dim);
+// squaredDistance(a, b, dim) when it is at most `bound`; otherwise some value above `bound`
+// (the sum so far), found without summing every dimension.
+float squaredDistanceBelow(const float* a, const float* b, int dim, float bound);
 
 class KdForest {
  public:
@@ -117,6 +120,7 @@ class KdForest {
 
   // Best-bin-first: examines whole buckets until at least `checks` distinct points were compared
   // and k neighbours are known, never visiting a branch whose bound exceeds the k-th distance.
+  // Safe to call from several threads at once while nothing modifies the forest.
   void search(const float* query, std::size_t k, int checks, std::vector<Neighbor>* out) const;
 
   // Every internal node, by tree then node id.
@@ -138,15 +142,17 @@ class KdForest {
  private:
   static constexpr std::int32_t kLeaf = -1;
   static constexpr std::int32_t kFree = -2;
+  // 16 bytes, four to a cache line: a search is bound by the loads of the nodes it descends,
+  // so the buckets live in their own array beside the nodes.
   struct Node {
     std::int32_t left = kLeaf;  // or kFree
     std::int32_t right = -1;
     std::uint16_t dim = 0;
     float value = 0;
-    std::vector<std::uint32_t> bucket;  // slots, leaves only
   };
   struct Tree {
     std::vector<Node> nodes;
+    std::vector<std::vector<std::uint32_t>> buckets;  // slots of leaf nodes[i], by node id
     // Free node ids, smallest first: the choice of id must not depend on the order of past frees,
     // or a restored forest (which only knows which ids are free) would pick other ids.
     std::priority_queue<std::int32_t, std::vector<std::int32_t>, std::greater<std::int32_t>> free;
@@ -181,9 +187,6 @@ class KdForest {
   std::vector<Tree> trees_;
   bool changed_all_ = false;
   std::vector<std::int32_t> path_;  // remove()'s scratch: the nodes from the root to a leaf
-  // Per-query "already compared" marks; a counter avoids clearing them between queries.
-  mutable std::vector<std::uint32_t> seen_;
-  mutable std::uint32_t query_stamp_ = 0;
 };
 
 }  // namespace placedb::vocab

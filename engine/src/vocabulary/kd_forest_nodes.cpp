@@ -68,7 +68,7 @@ void KdForest::takeChanges(ForestChanges* out) {
 
 void KdForest::loadNodes(const std::vector<ForestNode>& nodes) {
   for (const Tree& tree : trees_) {
-    if (tree.nodes.size() != 1 || tree.nodes[0].left != kLeaf || !tree.nodes[0].bucket.empty())
+    if (tree.nodes.size() != 1 || tree.nodes[0].left != kLeaf || !tree.buckets[0].empty())
       refuse("nodes can only be loaded into a fresh forest");
   }
   // Size each tree to its highest node id; every id starts free.
@@ -88,6 +88,7 @@ void KdForest::loadNodes(const std::vector<ForestNode>& nodes) {
   }
   for (std::size_t t = 0; t < trees_.size(); ++t) {
     trees_[t].nodes.assign(size[t], Node{});
+    trees_[t].buckets.assign(size[t], {});
     for (Node& n : trees_[t].nodes) n.left = kFree;
   }
   std::vector<std::size_t> internal(trees_.size(), 0);
@@ -144,6 +145,7 @@ void KdForest::replaySplits(const std::vector<SplitRecord>& log) {
   for (std::size_t t = 0; t < trees_.size(); ++t) {
     if (!trees_[t].free.empty()) refuse("a split log can only be replayed on a fresh forest");
     trees_[t].nodes.reserve(trees_[t].nodes.size() + added[t]);
+    trees_[t].buckets.reserve(trees_[t].buckets.size() + added[t]);
   }
   for (const SplitRecord& s : log) {
     if (s.tree >= trees_.size() || s.node >= trees_[s.tree].nodes.size() ||
@@ -158,7 +160,7 @@ void KdForest::replaySplits(const std::vector<SplitRecord>& log) {
 
 bool KdForest::pruneEmpty(std::uint32_t tree_index, std::int32_t node) {
   Tree& tree = trees_[tree_index];
-  if (tree.nodes[node].left < 0) return !tree.nodes[node].bucket.empty();
+  if (tree.nodes[node].left < 0) return !tree.buckets[node].empty();
   const std::int32_t left = tree.nodes[node].left;
   const std::int32_t right = tree.nodes[node].right;
   const bool left_live = pruneEmpty(tree_index, left);

@@ -7,6 +7,8 @@
 #include <sstream>
 #include <unordered_set>
 
+#include "features/feature_options.h"
+#include "features/parallel_for.h"
 #include "placedb/error.h"
 
 namespace placedb::vocab {
@@ -38,6 +40,8 @@ void VocabularyOptions::validate() const {
           "kd_trees must be in [1, 64], got " + std::to_string(kd_trees));
   require(checks >= 1 && checks <= (1 << 20),
           "checks must be in [1, 1048576], got " + std::to_string(checks));
+  require(threads >= 0 && threads <= 64,
+          "threads must be in [0, 64], got " + std::to_string(threads));
   require(leaf_size >= 1 && leaf_size <= 4096,
           "leaf_size must be in [1, 4096], got " + std::to_string(leaf_size));
 }
@@ -106,7 +110,8 @@ Quantization Vocabulary::quantize(const cv::Mat& descriptors, std::int64_t frame
   // ND, NND and nearest word of every feature against V_{t-1}.
   std::vector<std::vector<Neighbor>> best(m);
   const std::size_t k = options_.fixed ? 1 : 2;
-  for (int i = 0; i < m; ++i) forest_->search(row(i), k, options_.checks, &best[i]);
+  parallelFor(m, resolveThreadCount(options_.threads),
+              [&](int i) { forest_->search(row(i), k, options_.checks, &best[i]); });
 
   if (options_.fixed) {
     double sum = 0;
@@ -142,8 +147,9 @@ Quantization Vocabulary::quantize(const cv::Mat& descriptors, std::int64_t frame
   for (int i : order) {
     std::vector<Neighbor>& top = best[i];
     for (std::size_t w = 0; w < created_rows.size(); ++w) {
-      offerNeighbor(&top, 2,
-                    {squaredDistance(row(i), row(created_rows[w]), dim_), q.created_words[w]});
+      const float bound = top.size() < 2 ? std::numeric_limits<float>::infinity() : top[1].dist2;
+      const float d2 = squaredDistanceBelow(row(i), row(created_rows[w]), dim_, bound);
+      if (d2 <= bound) offerNeighbor(&top, 2, {d2, q.created_words[w]});
     }
     if (decideNewWord(top)) {
       q.word_of_feature[i] = next_word_id_++;

@@ -53,6 +53,9 @@ struct VocabularyOptions {
   int leaf_size = 8;                 // points per kd-tree bucket before it splits, [1, 4096]
   std::uint64_t seed = 0x706c616365646231ull;  // the forest's split choices
   bool fixed = false;                          // no new words: every feature takes its nearest word
+  // Threads searching a frame's features at once, 0 = one per hardware thread, [0, 64]. Each
+  // search reads the forest only, so the words chosen never depend on it.
+  int threads = Options().threads;
 
   // Throws placedb::Error(kInvalidArgument) naming the first setting out of range.
   void validate() const;
