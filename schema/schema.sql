@@ -1,4 +1,4 @@
--- placedb map schema: the current version (9), as one file.
+-- placedb map schema: the current version (10), as one file.
 -- It must equal the result of applying migrations/0001..N in order; a test compares
 -- sqlite_master of both. `sqlite3 new.db < schema/schema.sql` makes an empty placedb map.
 -- See schema/SCHEMA.md for the meaning of every table, column and view.
@@ -109,8 +109,6 @@ CREATE TABLE word_refs (
   response REAL NOT NULL,
   PRIMARY KEY (location_id, ordinal)
 ) WITHOUT ROWID;
--- The inverted index: locations that contain a word.
-CREATE INDEX word_refs_by_word ON word_refs (word_id, location_id);
 
 -- Graph edges, stored once per unordered pair and type (location_a < location_b).
 CREATE TABLE links (
@@ -253,5 +251,5 @@ INSERT INTO engine_state (key, value, checksum) VALUES ('storage.kd_nodes.rows',
 
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 9;
+PRAGMA user_version = 10;
 COMMIT;

@@ -23,5 +23,6 @@ target_sources(placedb_storage PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/map_store_state.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/records.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/row_checksums.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/wal_checkpointer.cpp
   ${PLACEDB_MIGRATIONS_CPP})
 target_include_directories(placedb_storage PRIVATE ${CMAKE_CURRENT_LIST_DIR}/src)

@@ -14,6 +14,7 @@
 #include "migrations_apply.h"
 #include "placedb/storage/map_files.h"
 #include "placedb/storage/migrations.h"
+#include "wal_checkpointer.h"
 #include "write_scope.h"
 
 namespace placedb::storage {
@@ -214,7 +215,9 @@ MapStore::MapStore(const std::string& given_path, OpenMode mode, const OpenOptio
     if (schemaVersion() < current) detail::applyMigrations(*db_, current);
     detail::checkSchemaObjects(*db_, path);
     db_->exec("PRAGMA foreign_keys = ON");
+    checkpointer_ = std::make_unique<detail::WalCheckpointer>(db_->handle(), path);
   } catch (...) {
+    checkpointer_.reset();
     db_.reset();
     ::close(lock_fd_);
     throw;
@@ -222,6 +225,7 @@ MapStore::MapStore(const std::string& given_path, OpenMode mode, const OpenOptio
 }
 
 MapStore::~MapStore() {
+  checkpointer_.reset();
   db_.reset();  // the last connection checkpoints and removes the -wal file
   if (lock_fd_ >= 0) ::close(lock_fd_);
 }

@@ -60,7 +60,7 @@ TEST(CliFaults, DamagedPagesAreRefusedBeforeAnyWrite) {
   auto seq = smallSequence(12);
   auto dir = scratchDir("CliFaults_damaged");
   auto good = mappedCopy(seq, dir, "good.placedb", {"--stop-after", "8"});
-  for (const char* object : {"words", "links", "hypotheses", "word_refs_by_word"}) {
+  for (const char* object : {"words", "links", "hypotheses", "links_by_b"}) {
     auto pages = leafPages(good, object);
     ASSERT_FALSE(pages.empty()) << object << ": no leaf page (dbstat missing?)";
     auto map = dir / (std::string(object) + ".placedb");

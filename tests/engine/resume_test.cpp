@@ -199,6 +199,7 @@ void downgradeToSchemaTwo(const std::string& path) {
       "outcome, f.location_id, f.feature_count, f.words_created, f.vocabulary_size, f.wm_size, "
       "f.stm_size, f.mean_quantisation_error, f.features_ms, f.quantisation_ms, f.likelihood_ms, "
       "f.filter_ms, f.memory_ms, f.storage_ms, f.total_ms FROM frames f");
+  exec("CREATE INDEX word_refs_by_word ON word_refs (word_id, location_id)");  // schema 10
   exec("PRAGMA user_version = 2");
   exec("COMMIT");
   sqlite3_close(db);

@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <filesystem>
@@ -142,6 +143,34 @@ TEST(Concurrency, ReaderSeesWholeFramesWhileWriterWrites) {
   EXPECT_EQ(reader_error, "");
   EXPECT_GE(reads.load(), 20);
   EXPECT_EQ(writer.frameCount(), kFrames);
+}
+
+TEST(Checkpoint, TheLogIsCopiedBackWhileTheWriterGoesOnAndGoneAfterClose) {
+  const auto dir = placedb::testing::scratchDir("Checkpoint");
+  const std::string path = (dir / "map.db").string();
+  const std::string wal = path + "-wal";
+  constexpr std::uintmax_t kPage = 4096;
+  std::uintmax_t largest = 0;
+  {
+    MapStore writer(path, OpenMode::kReadWrite);
+    // 60 commits of ~1 MB each: 15,000 pages of log in all, several checkpoints' worth.
+    const std::vector<std::uint8_t> blob(1 << 20, 0x5a);
+    for (int i = 0; i < 60; ++i) {
+      auto tx = writer.begin();
+      writer.putState("blob." + std::to_string(i % 4), blob);
+      tx.commit();
+      std::error_code error;
+      largest = std::max(largest, std::filesystem::file_size(wal, error));
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    // Checkpointed in the background: without it the log would hold every commit (60 MB); the
+    // writer's own fallback would let it reach 8 x 4000 pages.
+    EXPECT_LT(largest, 6000 * kPage) << "largest log " << largest;
+    EXPECT_EQ(writer.getState("blob.3")->size(), blob.size());
+  }
+  EXPECT_FALSE(std::filesystem::exists(wal)) << "the last connection removes the log";
+  MapStore reader(path, OpenMode::kReadOnly);
+  EXPECT_EQ(reader.getState("blob.0")->size(), std::size_t{1} << 20);
 }
 
 TEST(Concurrency, SecondPlacedbWriterIsRefused) {

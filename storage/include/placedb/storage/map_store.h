@@ -21,7 +21,8 @@ namespace placedb::storage {
 
 namespace detail {
 class Database;
-}
+class WalCheckpointer;
+}  // namespace detail
 
 enum class OpenMode { kReadWrite, kReadOnly };
 
@@ -213,6 +214,7 @@ class MapStore {
   bool read_only_;
   int lock_fd_ = -1;  // holds the writer's advisory lock
   std::unique_ptr<detail::Database> db_;
+  std::unique_ptr<detail::WalCheckpointer> checkpointer_;  // writers only
 };
 
 }  // namespace placedb::storage
