@@ -23,50 +23,62 @@ const std::string& SurfExtractor::name() const {
 
 int SurfExtractor::dim() const { return kSurfDescriptorDim; }
 
-std::vector<cv::KeyPoint> SurfExtractor::detect(const cv::Mat& grey8, int max_features, int threads,
-                                                cv::Mat& descriptors) const {
-  const IntegralImage integral(grey8);
+struct SurfExtractor::Detection {
+  IntegralImage integral;
+  std::vector<cv::KeyPoint> keypoints;
+};
+
+SurfExtractor::Detection SurfExtractor::detect(const cv::Mat& grey8, int max_features,
+                                               int threads) const {
+  Detection d{IntegralImage(grey8), {}};
   SurfDetectorSettings detector;
   detector.hessian_threshold = options_.hessian_threshold;
   detector.octaves = options_.octaves;
   detector.intervals = options_.intervals;
   detector.edge_ratio = options_.edge_ratio;
   detector.threads = threads;
-  const std::vector<cv::KeyPoint> blobs = detectSurfBlobs(integral, detector);
+  const std::vector<cv::KeyPoint> blobs = detectSurfBlobs(d.integral, detector);
 
   // Rank before describing so that max_features also saves the descriptor work.
   const std::vector<int> kept = rankKeypoints(blobs, max_features, options_.min_response);
-  std::vector<cv::KeyPoint> keypoints;
-  keypoints.reserve(kept.size());
-  for (int index : kept) keypoints.push_back(blobs[index]);
-  describeSurfKeypoints(integral, keypoints, options_.upright, threads, descriptors);
-  return keypoints;
+  d.keypoints.reserve(kept.size());
+  for (int index : kept) d.keypoints.push_back(blobs[index]);
+  return d;
+}
+
+void SurfExtractor::describe(Detection& detection, int threads, cv::Mat& descriptors) const {
+  describeSurfKeypoints(detection.integral, detection.keypoints, options_.upright, threads,
+                        descriptors);
 }
 
 Features SurfExtractor::extract(const cv::Mat& grey8) const {
   requireExtractableImage(grey8, name());
   const int threads = resolveThreadCount(options_.threads);
-  cv::Mat descriptors;
-  std::vector<cv::KeyPoint> keypoints = detect(grey8, options_.max_features, threads, descriptors);
+  Detection chosen = detect(grey8, options_.max_features, threads);
   // Too few blobs at the detector's finest scale: look again on the image doubled (Lowe's first
   // octave), where blobs of one or two pixels become detectable. Four times the area costs four
   // times the detection, so it is done only where it can at least double the count, up to the
   // target: an image with half the target or fewer. Keypoints come back in this image's own
   // pixels, so the check and a pose see the image the caller gave.
+  bool doubled = false;
   const int target = options_.feature_target;
-  if (target > 0 && 2 * keypoints.size() <= static_cast<std::size_t>(target)) {
-    cv::Mat doubled;
-    cv::resize(grey8, doubled, cv::Size(), 2.0, 2.0, cv::INTER_LINEAR);
+  if (target > 0 && 2 * chosen.keypoints.size() <= static_cast<std::size_t>(target)) {
+    cv::Mat twice;
+    cv::resize(grey8, twice, cv::Size(), 2.0, 2.0, cv::INTER_LINEAR);
     const int cap = options_.max_features > 0 ? std::min(options_.max_features, target) : target;
-    cv::Mat finer;
-    std::vector<cv::KeyPoint> more = detect(doubled, cap, threads, finer);
-    if (more.size() >= 2 * keypoints.size()) {
-      for (cv::KeyPoint& k : more) {
-        k.pt *= 0.5f;
-        k.size *= 0.5f;
-      }
-      keypoints = std::move(more);
-      descriptors = finer;
+    Detection finer = detect(twice, cap, threads);
+    if (finer.keypoints.size() >= 2 * chosen.keypoints.size()) {
+      chosen = std::move(finer);
+      doubled = true;
+    }
+  }
+  cv::Mat descriptors;
+  describe(chosen, threads, descriptors);
+  std::vector<cv::KeyPoint> keypoints = std::move(chosen.keypoints);
+  if (doubled) {
+    for (cv::KeyPoint& k : keypoints) {
+      k.pt *= 0.5f;
+      k.size *= 0.5f;
     }
   }
   return makeFeatures(name(), type(), dim(), keypoints, descriptors, 0, 0.0f);

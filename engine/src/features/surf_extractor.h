@@ -20,9 +20,11 @@ class SurfExtractor : public FeatureExtractor {
   DescriptorType type() const override { return DescriptorType::kFloat32; }
 
  private:
-  // Detected, ranked and described keypoints of one image, in its own pixels.
-  std::vector<cv::KeyPoint> detect(const cv::Mat& grey8, int max_features, int threads,
-                                   cv::Mat& descriptors) const;
+  // Detected and ranked keypoints of one image, in its own pixels; describe() adds their
+  // descriptors, so that a search whose keypoints are dropped costs no description.
+  struct Detection;
+  Detection detect(const cv::Mat& grey8, int max_features, int threads) const;
+  void describe(Detection& detection, int threads, cv::Mat& descriptors) const;
 
   FeatureOptions options_;
 };
