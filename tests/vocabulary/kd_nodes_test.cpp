@@ -131,6 +131,34 @@ TEST(KdForestNodes, RestoredFromNodesAnswersTheSame) {
   expectSameAnswers(grown, grown.state());
 }
 
+TEST(KdForestNodes, RestoredForestErasesAndGrowsAsTheOriginal) {
+  // Erasing finds each word's leaf and that leaf's parent from tables the restore fills (not by
+  // descending the trees): after a restore they must lead to the same splices as the original.
+  Vocabulary grown(smallBuckets(), kDim, "test");
+  SlidingWords words;
+  for (int r = 0; r < 12; ++r) {
+    words.round(grown, 100);
+    if (r >= 4) words.dropOldest(grown, 100);
+  }
+  std::vector<std::int64_t> ids = grown.ids(), frames;
+  cv::Mat rows;
+  for (std::int64_t id : ids) {
+    frames.push_back(grown.createdFrame(id));
+    rows.push_back(cv::Mat(1, kDim, CV_32F, const_cast<float*>(grown.descriptor(id))).clone());
+  }
+  Vocabulary restored(smallBuckets(), kDim, "test");
+  restored.restore(grown.state(), ids, rows, frames);
+  SlidingWords twin = words;
+  for (int r = 0; r < 8; ++r) {  // every word restored is erased by the end
+    words.round(grown, 100);
+    words.dropOldest(grown, 150);
+    twin.round(restored, 100);
+    twin.dropOldest(restored, 150);
+    ASSERT_EQ(restored.state().nodes, grown.state().nodes) << "round " << r;
+  }
+  expectSameAnswers(grown, restored.state());
+}
+
 TEST(KdForestNodes, DamagedNodesAreRefused) {
   Vocabulary grown(smallBuckets(), kDim, "test");
   SlidingWords words;

@@ -58,6 +58,7 @@ KdForest::KdForest(const SlotStore* store, int trees, int leaf_size, std::uint64
   for (auto& tree : trees_) {  // every tree starts as one empty leaf
     tree.nodes.emplace_back();
     tree.buckets.emplace_back();
+    tree.parent.push_back(-1);
   }
 }
 
@@ -70,13 +71,24 @@ std::int32_t KdForest::leafOf(const Tree& tree, const float* v) const {
   return node;
 }
 
+void KdForest::placeInLeaf(Tree& tree, std::uint32_t slot, std::int32_t leaf) {
+  tree.buckets[static_cast<std::size_t>(leaf)].push_back(slot);
+  tree.leaf_of[slot] = leaf;
+}
+
+void KdForest::reserveSlots(std::size_t slots) {
+  for (Tree& tree : trees_)
+    if (tree.leaf_of.size() < slots) tree.leaf_of.resize(slots, -1);
+}
+
 void KdForest::insert(std::uint32_t slot) {
+  reserveSlots(std::size_t(slot) + 1);
   const float* v = store_->data(slot);
   for (std::uint32_t t = 0; t < trees_.size(); ++t) {
     const std::int32_t leaf = leafOf(trees_[t], v);
-    auto& bucket = trees_[t].buckets[static_cast<std::size_t>(leaf)];
-    bucket.push_back(slot);
-    if (bucket.size() > std::size_t(leaf_size_)) trySplit(t, leaf);
+    placeInLeaf(trees_[t], slot, leaf);
+    if (trees_[t].buckets[static_cast<std::size_t>(leaf)].size() > std::size_t(leaf_size_))
+      trySplit(t, leaf);
   }
 }
 
@@ -119,33 +131,28 @@ void KdForest::BackgroundFill::work(std::size_t first_tree, std::size_t stride) 
     for (std::size_t t = first_tree; t < forest_->trees_.size(); t += stride) {
       Tree& tree = forest_->trees_[t];
       for (std::uint32_t slot : *run)
-        tree.buckets[static_cast<std::size_t>(forest_->leafOf(tree, forest_->store_->data(slot)))]
-            .push_back(slot);
+        placeInLeaf(tree, slot, forest_->leafOf(tree, forest_->store_->data(slot)));
     }
   }
 }
 
 void KdForest::remove(std::uint32_t slot) {
-  const float* v = store_->data(slot);
   for (std::uint32_t t = 0; t < trees_.size(); ++t) {
     Tree& tree = trees_[t];
-    path_.clear();
-    std::int32_t node = 0;
-    while (tree.nodes[node].left >= 0) {
-      path_.push_back(node);
-      const Node& n = tree.nodes[node];
-      node = v[n.dim] < n.value ? n.left : n.right;
-    }
-    auto& bucket = tree.buckets[static_cast<std::size_t>(node)];
-    auto it = std::find(bucket.begin(), bucket.end(), slot);
-    if (it == bucket.end()) {
+    const std::int32_t node = slot < tree.leaf_of.size() ? tree.leaf_of[slot] : -1;
+    auto* bucket = node >= 0 ? &tree.buckets[static_cast<std::size_t>(node)] : nullptr;
+    auto it = bucket ? std::find(bucket->begin(), bucket->end(), slot)
+                     : std::vector<std::uint32_t>::iterator();
+    if (!bucket || it == bucket->end()) {
       throw Error(ErrorCode::kInternal, "kd-forest: removed point is not in its bucket");
     }
-    *it = bucket.back();
-    bucket.pop_back();
+    *it = bucket->back();
+    bucket->pop_back();
+    tree.leaf_of[slot] = -1;
     // An empty leaf would keep its split forever: the trees would grow with every word ever
     // inserted, not with the live ones.
-    if (bucket.empty() && !path_.empty()) spliceOut(t, path_.back(), node);
+    const std::int32_t parent = tree.parent[static_cast<std::size_t>(node)];
+    if (bucket->empty() && parent >= 0) spliceOut(t, parent, node);
   }
 }
 
@@ -159,6 +166,7 @@ std::int32_t KdForest::allocate(Tree& tree) {
   }
   tree.nodes.emplace_back();
   tree.buckets.emplace_back();
+  tree.parent.push_back(-1);
   return static_cast<std::int32_t>(tree.nodes.size() - 1);
 }
 
@@ -167,6 +175,7 @@ void KdForest::release(Tree& tree, std::int32_t node) {
   n = Node{};
   n.left = kFree;
   std::vector<std::uint32_t>().swap(tree.buckets[static_cast<std::size_t>(node)]);
+  tree.parent[static_cast<std::size_t>(node)] = -1;
   tree.free.push(node);
 }
 
@@ -187,6 +196,13 @@ void KdForest::spliceOut(std::uint32_t tree_index, std::int32_t parent, std::int
       tree.nodes[parent].left == child ? tree.nodes[parent].right : tree.nodes[parent].left;
   tree.nodes[parent] = tree.nodes[sibling];
   tree.buckets[parent].swap(tree.buckets[sibling]);
+  // What hung from the sibling now hangs from the parent's id.
+  if (tree.nodes[parent].left >= 0) {
+    tree.parent[static_cast<std::size_t>(tree.nodes[parent].left)] = parent;
+    tree.parent[static_cast<std::size_t>(tree.nodes[parent].right)] = parent;
+  } else {
+    for (std::uint32_t slot : tree.buckets[parent]) tree.leaf_of[slot] = parent;
+  }
   release(tree, child);
   release(tree, sibling);
   markChanged(tree, parent);
@@ -237,9 +253,9 @@ void KdForest::applySplit(std::uint32_t tree_index, std::int32_t node_index, std
   node.right = right;
   node.dim = dim;
   node.value = value;
-  for (std::uint32_t p : bucket) {
-    tree.buckets[store_->data(p)[dim] < value ? left : right].push_back(p);
-  }
+  tree.parent[static_cast<std::size_t>(left)] = node_index;
+  tree.parent[static_cast<std::size_t>(right)] = node_index;
+  for (std::uint32_t p : bucket) placeInLeaf(tree, p, store_->data(p)[dim] < value ? left : right);
   markChanged(tree, node_index);
 }
 

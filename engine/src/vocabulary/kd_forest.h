@@ -91,6 +91,8 @@ class KdForest {
   KdForest(const SlotStore* store, int trees, int leaf_size, std::uint64_t seed);
 
   void insert(std::uint32_t slot);
+  // Room for slots [0, slots) before a BackgroundFill, whose threads must not grow the tables.
+  void reserveSlots(std::size_t slots);
   // Used by restore, fed run by run while the caller still loads descriptors: the loaded nodes
   // already hold every split the live points caused, so the points only go to their buckets,
   // without splitting. Runs go down the trees on background threads, each tree taking them in
@@ -153,6 +155,10 @@ class KdForest {
   struct Tree {
     std::vector<Node> nodes;
     std::vector<std::vector<std::uint32_t>> buckets;  // slots of leaf nodes[i], by node id
+    // Removal finds a point's leaf and the leaf's parent here instead of descending the tree
+    // (a frame that moves many words to LTM would pay a descent per word and tree).
+    std::vector<std::int32_t> parent;   // by node id; -1 for the root and free nodes
+    std::vector<std::int32_t> leaf_of;  // by slot: the leaf holding it
     // Free node ids, smallest first: the choice of id must not depend on the order of past frees,
     // or a restored forest (which only knows which ids are free) would pick other ids.
     std::priority_queue<std::int32_t, std::vector<std::int32_t>, std::greater<std::int32_t>> free;
@@ -179,6 +185,7 @@ class KdForest {
   void spliceOut(std::uint32_t tree_index, std::int32_t parent, std::int32_t child);
   bool pruneEmpty(std::uint32_t tree_index, std::int32_t node);  // false: the subtree is empty
   void markChanged(Tree& tree, std::int32_t node);
+  static void placeInLeaf(Tree& tree, std::uint32_t slot, std::int32_t leaf);
 
   const SlotStore* store_;
   int dim_;
@@ -186,7 +193,6 @@ class KdForest {
   std::uint64_t seed_;
   std::vector<Tree> trees_;
   bool changed_all_ = false;
-  std::vector<std::int32_t> path_;  // remove()'s scratch: the nodes from the root to a leaf
 };
 
 }  // namespace placedb::vocab

@@ -89,6 +89,7 @@ void KdForest::loadNodes(const std::vector<ForestNode>& nodes) {
   for (std::size_t t = 0; t < trees_.size(); ++t) {
     trees_[t].nodes.assign(size[t], Node{});
     trees_[t].buckets.assign(size[t], {});
+    trees_[t].parent.assign(size[t], -1);
     for (Node& n : trees_[t].nodes) n.left = kFree;
   }
   std::vector<std::size_t> internal(trees_.size(), 0);
@@ -124,6 +125,7 @@ void KdForest::loadNodes(const std::vector<ForestNode>& nodes) {
           refuse("node " + std::to_string(child) + " of tree " + std::to_string(t) +
                  " has two parents");
         reached[static_cast<std::size_t>(child)] = 1;
+        tree.parent[static_cast<std::size_t>(child)] = id;
         stack.push_back(child);
       }
     }
@@ -146,6 +148,7 @@ void KdForest::replaySplits(const std::vector<SplitRecord>& log) {
     if (!trees_[t].free.empty()) refuse("a split log can only be replayed on a fresh forest");
     trees_[t].nodes.reserve(trees_[t].nodes.size() + added[t]);
     trees_[t].buckets.reserve(trees_[t].buckets.size() + added[t]);
+    trees_[t].parent.reserve(trees_[t].parent.size() + added[t]);
   }
   for (const SplitRecord& s : log) {
     if (s.tree >= trees_.size() || s.node >= trees_[s.tree].nodes.size() ||

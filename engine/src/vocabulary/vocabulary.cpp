@@ -281,6 +281,7 @@ void Vocabulary::restore(const IndexState& state, const std::vector<std::int64_t
   // touch, and fault in, as much memory again), and each run goes down the trees on other
   // threads while the next one loads.
   store_.reserve(ids.size());
+  forest_->reserveSlots(store_.slotCount() + ids.size());
   KdForest::BackgroundFill fill(forest_.get());
   for (std::size_t begin = 0; begin < ids.size();) {
     const std::size_t count = std::min(ids.size() - begin, store_.runRoom());
