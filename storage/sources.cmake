@@ -17,10 +17,11 @@ target_sources(placedb_storage PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/map_files.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/migrations.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_store.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/map_store_memory.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/map_store_words.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/map_store_links.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/map_store_state.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_memory.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_words.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_links.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_state.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/records.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/row_checksums.cpp
   ${PLACEDB_MIGRATIONS_CPP})

@@ -11,7 +11,7 @@
 
 #include <gtest/gtest.h>
 
-#include "placedb/storage/map_store.h"
+#include "placedb/storage/sqlite_map_store.h"
 #include "storage_test_util.h"
 #include "test_paths.h"
 
@@ -43,7 +43,7 @@ TEST(Crash, KilledWriterLosesOnlyTheOpenFrame) {
   if (child == 0) {
     close(ready[0]);
     try {
-      MapStore store(path, OpenMode::kReadWrite);
+      SqliteMapStore store(path, OpenMode::kReadWrite);
       const auto session = store.beginSession("camera", {{"k", "v"}}, "test");
       for (int i = 0; i < kCommitted; ++i) testing::writeFrame(store, session, i, 20);
       // Frame kCommitted: written but never committed.
@@ -73,7 +73,7 @@ TEST(Crash, KilledWriterLosesOnlyTheOpenFrame) {
   waitpid(child, &status, 0);
   ASSERT_TRUE(WIFSIGNALED(status));
 
-  MapStore store(path, OpenMode::kReadWrite);  // the dead writer's lock went with it
+  SqliteMapStore store(path, OpenMode::kReadWrite);  // the dead writer's lock went with it
   EXPECT_EQ(queryText(path, "PRAGMA integrity_check"), "ok");
   EXPECT_EQ(queryText(path, "SELECT count(*) FROM pragma_foreign_key_check"), "0");
   const auto session = store.lastSession();
@@ -97,7 +97,7 @@ TEST(Crash, KilledWriterLosesOnlyTheOpenFrame) {
 TEST(Concurrency, ReaderSeesWholeFramesWhileWriterWrites) {
   const auto dir = placedb::testing::scratchDir("ReaderWhileWriting");
   const std::string path = (dir / "map.db").string();
-  MapStore writer(path, OpenMode::kReadWrite);
+  SqliteMapStore writer(path, OpenMode::kReadWrite);
   const auto session = writer.beginSession("camera", {}, "test");
   testing::writeFrame(writer, session, 0);
   constexpr int kFrames = 150;
@@ -107,7 +107,7 @@ TEST(Concurrency, ReaderSeesWholeFramesWhileWriterWrites) {
   std::string reader_error;  // written by the reader before reader_failed
   std::thread reader_thread([&] {
     try {
-      MapStore reader(path, OpenMode::kReadOnly);
+      SqliteMapStore reader(path, OpenMode::kReadOnly);
       std::int64_t previous = 0;
       while (!done.load()) {
         const std::int64_t frames = reader.frameCount();
@@ -147,9 +147,9 @@ TEST(Concurrency, ReaderSeesWholeFramesWhileWriterWrites) {
 TEST(Concurrency, SecondPlacedbWriterIsRefused) {
   const auto dir = placedb::testing::scratchDir("SecondWriter");
   const std::string path = (dir / "map.db").string();
-  MapStore first(path, OpenMode::kReadWrite);
+  SqliteMapStore first(path, OpenMode::kReadWrite);
   try {
-    MapStore second(path, OpenMode::kReadWrite);
+    SqliteMapStore second(path, OpenMode::kReadWrite);
     FAIL() << "a second writer opened the map";
   } catch (const Error& error) {
     EXPECT_EQ(error.code(), ErrorCode::kMapBusy);
@@ -159,8 +159,8 @@ TEST(Concurrency, SecondPlacedbWriterIsRefused) {
   const pid_t child = fork();
   if (child == 0) {
     try {
-      MapStore reader(path, OpenMode::kReadOnly);
-      MapStore second(path, OpenMode::kReadWrite);
+      SqliteMapStore reader(path, OpenMode::kReadOnly);
+      SqliteMapStore second(path, OpenMode::kReadWrite);
       _exit(1);
     } catch (const Error& error) {
       _exit(error.code() == ErrorCode::kMapBusy ? 0 : 2);
@@ -176,7 +176,7 @@ TEST(Concurrency, ForeignWriteTransactionMakesBeginBusy) {
   const std::string path = (dir / "map.db").string();
   OpenOptions options;
   options.busy_timeout_ms = 100;
-  MapStore store(path, OpenMode::kReadWrite, options);
+  SqliteMapStore store(path, OpenMode::kReadWrite, options);
   const auto session = store.beginSession("camera", {}, "test");
   sqlite3* other = nullptr;
   ASSERT_EQ(sqlite3_open(path.c_str(), &other), SQLITE_OK);
@@ -202,7 +202,7 @@ TEST(DiskFull, FullMapFailsTheFrameWithDiskFull) {
   const std::string path = (dir / "map.db").string();
   OpenOptions options;
   options.max_page_count = 120;
-  MapStore store(path, OpenMode::kReadWrite, options);
+  SqliteMapStore store(path, OpenMode::kReadWrite, options);
   const auto session = store.beginSession("camera", {}, "test");
   int written = 0;
   try {

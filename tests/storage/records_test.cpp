@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "placedb/storage/map_store.h"
+#include "placedb/storage/sqlite_map_store.h"
 #include "storage_test_util.h"
 #include "test_paths.h"
 
@@ -20,7 +20,7 @@ class Records : public ::testing::Test {
     dir_ = placedb::testing::scratchDir(
         std::string("Records_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     path_ = (dir_ / "map.db").string();
-    store_ = std::make_unique<MapStore>(path_, OpenMode::kReadWrite);
+    store_ = std::make_unique<SqliteMapStore>(path_, OpenMode::kReadWrite);
     session_ = store_->beginSession("/data/lip6", {{"T_loop", "0.11"}, {"wm_max", "300"}}, "0.1.0");
   }
 
@@ -449,7 +449,7 @@ TEST_F(Records, TransactionRollsBackUnlessCommitted) {
 
 TEST_F(Records, ReadOnlyOpenCannotWrite) {
   testing::writeFrame(*store_, session_, 0);
-  MapStore reader(path_, OpenMode::kReadOnly);
+  SqliteMapStore reader(path_, OpenMode::kReadOnly);
   EXPECT_TRUE(reader.readOnly());
   EXPECT_EQ(reader.frameCount(), 1);
   EXPECT_EQ(reader.loadWordRefs(1).size(), 4u);
@@ -495,7 +495,7 @@ TEST(ReadOnlyMedia, MapInReadOnlyFolderOpensForReadingOnly) {
   std::filesystem::create_directories(folder);
   const std::string path = (folder / "map.db").string();
   {
-    MapStore store(path, OpenMode::kReadWrite);
+    SqliteMapStore store(path, OpenMode::kReadWrite);
     const auto session = store.beginSession("src", {}, "test");
     for (int i = 0; i < 3; ++i) testing::writeFrame(store, session, i);
   }
@@ -509,7 +509,7 @@ TEST(ReadOnlyMedia, MapInReadOnlyFolderOpensForReadingOnly) {
                               fs::perms::others_exec);
   const int status = runAsUnprivileged([&] {
     {
-      MapStore reader(path, OpenMode::kReadOnly);
+      SqliteMapStore reader(path, OpenMode::kReadOnly);
       if (reader.frameCount() != 3 || reader.loadWordRefs(2).size() != 4) return 1;
       try {
         reader.insertLink(1, 2, LinkType::kNeighbour, 1.0);
@@ -519,7 +519,7 @@ TEST(ReadOnlyMedia, MapInReadOnlyFolderOpensForReadingOnly) {
       }
     }
     try {
-      MapStore writer(path, OpenMode::kReadWrite);
+      SqliteMapStore writer(path, OpenMode::kReadWrite);
       return 4;
     } catch (const Error& error) {
       if (error.code() != ErrorCode::kReadOnly) return 5;

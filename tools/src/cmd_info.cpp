@@ -32,7 +32,8 @@ const char* linkName(storage::LinkType type) {
 }  // namespace
 
 std::optional<Options> lastSessionOptions(const std::string& path) {
-  storage::MapStore store(path, storage::OpenMode::kReadOnly);
+  const auto store_owner = storage::openMapStore(path, storage::OpenMode::kReadOnly);
+  storage::MapStore& store = *store_owner;
   const auto last = store.lastSession();
   if (!last) return std::nullopt;
   return Options::fromStoredSettings(store.settings(last->id));
@@ -41,7 +42,8 @@ std::optional<Options> lastSessionOptions(const std::string& path) {
 nlohmann::json inspectMap(const std::string& path) {
   if (!std::filesystem::exists(path))
     throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", path));
-  storage::MapStore store(path, storage::OpenMode::kReadOnly);
+  const auto store_owner = storage::openMapStore(path, storage::OpenMode::kReadOnly);
+  storage::MapStore& store = *store_owner;
   nlohmann::json info;
   info["path"] = path;
   // Committed frames may still sit in the write-ahead log (while a writer has the map open, or

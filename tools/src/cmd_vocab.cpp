@@ -22,7 +22,8 @@ namespace placedb::cli {
 vocab::VocabularyData wordsOfMap(const std::string& map_path) {
   if (!std::filesystem::exists(map_path))
     throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", map_path));
-  storage::MapStore store(map_path, storage::OpenMode::kReadOnly);
+  const auto store_owner = storage::openMapStore(map_path, storage::OpenMode::kReadOnly);
+  storage::MapStore& store = *store_owner;
   vocab::VocabularyData data;
   auto last = store.lastSession();
   const auto imports = store.vocabularyImports();

@@ -62,7 +62,8 @@ ResumeDecision sessionToResume(const std::string& map_path, const ImageSource& s
   if (!std::filesystem::exists(map_path, ec) || std::filesystem::file_size(map_path, ec) == 0)
     return {};
   try {
-    storage::MapStore store(map_path, storage::OpenMode::kReadOnly);
+    const auto store_owner = storage::openMapStore(map_path, storage::OpenMode::kReadOnly);
+    storage::MapStore& store = *store_owner;
     auto last = store.lastSession();
     if (!last) return {};
     auto next = resumeIndex(*last, store.lastFrameIndex(last->id), source);

@@ -275,7 +275,9 @@ ReportSummary writeReport(const ReportRequest& request) {
   if (judged) requireReadableFile(request.gt, "ground truth");
   requireWritableFolder(request.out);
 
-  storage::MapStore store(request.map.string(), storage::OpenMode::kReadOnly);
+  const auto store_owner =
+      storage::openMapStore(request.map.string(), storage::OpenMode::kReadOnly);
+  storage::MapStore& store = *store_owner;
   // The log names the session that wrote it: its thumbnails come from that session's frames.
   const std::optional<std::int64_t> wanted =
       request.session ? request.session : sessionOfLog(request.log);
