@@ -2,6 +2,7 @@
 // that picks a backend from the map's name.
 #include "placedb/storage/map_store.h"
 
+#include "pg_map_store.h"
 #include "placedb/storage/migrations.h"
 #include "placedb/storage/sqlite_map_store.h"
 
@@ -13,9 +14,7 @@ bool isServerMap(const std::string& map) {
 
 std::unique_ptr<MapStore> openMapStore(const std::string& map, OpenMode mode,
                                        const OpenOptions& options) {
-  if (isServerMap(map))
-    throw StorageError(ErrorCode::kInvalidArgument,
-                       "a PostgreSQL map needs a placedb built with its backend");
+  if (isServerMap(map)) return openPgMapStore(map, mode, options);
   return std::make_unique<SqliteMapStore>(map, mode, options);
 }
 
