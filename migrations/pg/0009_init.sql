@@ -104,7 +104,7 @@ CREATE INDEX words_imported ON words (id) WHERE vocabulary_import_id IS NOT NULL
 CREATE TABLE word_refs (
   location_id bigint NOT NULL REFERENCES locations (id) ON DELETE CASCADE,
   ordinal bigint NOT NULL,
-  word_id bigint NOT NULL REFERENCES words (id) DEFERRABLE INITIALLY DEFERRED,
+  word_id bigint NOT NULL REFERENCES words (id),
   x double precision NOT NULL,
   y double precision NOT NULL,
   size double precision NOT NULL,
@@ -126,8 +126,7 @@ CREATE INDEX links_by_b ON links (location_b);
 
 CREATE TABLE hypotheses (
   frame_id bigint PRIMARY KEY REFERENCES frames (id) DEFERRABLE INITIALLY DEFERRED,
-  best_location_id bigint REFERENCES locations (id) ON DELETE SET NULL
-    DEFERRABLE INITIALLY DEFERRED,
+  best_location_id bigint REFERENCES locations (id) ON DELETE SET NULL,
   posterior double precision NOT NULL,
   loop_probability double precision NOT NULL,
   accepted bigint NOT NULL CHECK (accepted IN (0, 1)),
