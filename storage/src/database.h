@@ -51,6 +51,7 @@ class Statement {
   std::optional<double> columnOptionalDouble(int column) const;
 
   const std::string& sql() const { return sql_; }
+  sqlite3_stmt* handle() const { return stmt_; }
 
  private:
   void check(int rc, const char* what) const;

@@ -199,6 +199,22 @@ PgParams& PgParams::addBytesArray(const std::vector<std::pair<const void*, std::
   return *this;
 }
 
+PgParams& PgParams::addCell(const CellValue& v, Oid target) {
+  using Kind = CellValue::Kind;
+  if (v.kind == Kind::kNull) {
+    push(target, std::string(), true);
+  } else if (target == kFloat8) {
+    push(target, float8Bytes(v.kind == Kind::kInteger ? static_cast<double>(v.integer) : v.real));
+  } else if (target == kText || target == kBytea) {
+    push(target, v.kind == Kind::kInteger ? std::to_string(v.integer)
+                 : v.kind == Kind::kReal  ? std::to_string(v.real)
+                                          : v.bytes);
+  } else {
+    push(kInt8, int8Bytes(v.kind == Kind::kReal ? static_cast<std::int64_t>(v.real) : v.integer));
+  }
+  return *this;
+}
+
 std::vector<const char*> PgParams::values() const {
   std::vector<const char*> out;
   for (std::size_t i = 0; i < bytes_.size(); ++i)
@@ -219,7 +235,7 @@ std::int64_t PgResult::changed() const {
   return tuples && *tuples ? std::stoll(tuples) : 0;
 }
 
-const char* PgResult::cell(int row, int column, int* length) const {
+const char* PgResult::raw(int row, int column, int* length) const {
   *length = PQgetlength(result_, row, column);
   return PQgetvalue(result_, row, column);
 }
@@ -227,7 +243,7 @@ const char* PgResult::cell(int row, int column, int* length) const {
 std::int64_t PgResult::integer(int row, int column) const {
   if (isNull(row, column)) return 0;
   int length = 0;
-  const char* data = cell(row, column, &length);
+  const char* data = raw(row, column, &length);
   const Oid type = PQftype(result_, column);
   if (type == kInt8 || type == kInt4 || type == kInt2 || type == kBool) {
     const std::uint64_t raw = readBig(data, length);
@@ -249,7 +265,7 @@ std::optional<std::int64_t> PgResult::optionalInteger(int row, int column) const
 double PgResult::real(int row, int column) const {
   if (isNull(row, column)) return 0;
   int length = 0;
-  const char* data = cell(row, column, &length);
+  const char* data = raw(row, column, &length);
   const Oid type = PQftype(result_, column);
   if (type == kFloat8) {
     const std::uint64_t bits = readBig(data, 8);
@@ -274,7 +290,7 @@ std::optional<double> PgResult::optionalReal(int row, int column) const {
 std::string PgResult::text(int row, int column) const {
   if (isNull(row, column)) return {};
   int length = 0;
-  const char* data = cell(row, column, &length);
+  const char* data = raw(row, column, &length);
   const Oid type = PQftype(result_, column);
   if (type == kText || type == kVarchar || type == kName || type == kBpchar || type == kBytea)
     return std::string(data, length);
@@ -283,8 +299,21 @@ std::string PgResult::text(int row, int column) const {
 
 std::pair<const std::uint8_t*, std::size_t> PgResult::bytes(int row, int column) const {
   int length = 0;
-  const char* data = cell(row, column, &length);
+  const char* data = raw(row, column, &length);
   return {reinterpret_cast<const std::uint8_t*>(data), static_cast<std::size_t>(length)};
+}
+
+CellValue PgResult::cell(int row, int column) const {
+  if (isNull(row, column)) return {};
+  const Oid type = PQftype(result_, column);
+  if (type == kFloat8 || type == kFloat4) return {CellValue::Kind::kReal, 0, real(row, column), {}};
+  if (type == kText || type == kVarchar || type == kName || type == kBpchar)
+    return {CellValue::Kind::kText, 0, 0, text(row, column)};
+  if (type == kBytea) {
+    const auto [data, size] = bytes(row, column);
+    return {CellValue::Kind::kBlob, 0, 0, std::string(reinterpret_cast<const char*>(data), size)};
+  }
+  return {CellValue::Kind::kInteger, integer(row, column), 0, {}};
 }
 
 // ---- PgConnection ----

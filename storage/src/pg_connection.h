@@ -33,6 +33,8 @@ class PgParams {
   PgParams& addArray(const std::vector<double>& values);
   PgParams& addArray(const std::vector<std::string>& texts);
   PgParams& addBytesArray(const std::vector<std::pair<const void*, std::size_t>>& blobs);
+  // A value of any kind, sent as the column type `target` (int8, float8, text or bytea) wants.
+  PgParams& addCell(const CellValue& value, Oid target);
 
   int size() const { return static_cast<int>(types_.size()); }
   const std::vector<Oid>& types() const { return types_; }
@@ -71,6 +73,8 @@ class PgResult {
   std::string text(int row, int column) const;  // "" for NULL
   std::pair<const std::uint8_t*, std::size_t> bytes(int row, int column) const;
   bool boolean(int row, int column) const { return integer(row, column) != 0; }
+  // The value as it is, by the column's type.
+  CellValue cell(int row, int column) const;
   // Gives up ownership (the caller clears the result).
   PGresult* release() {
     PGresult* r = result_;
@@ -79,7 +83,7 @@ class PgResult {
   }
 
  private:
-  const char* cell(int row, int column, int* length) const;
+  const char* raw(int row, int column, int* length) const;
   PGresult* result_;
 };
 

@@ -152,6 +152,10 @@ class PgMapStore final : public MapStore {
   std::int64_t recordVocabularyImport(const VocabularyImportRecord& import) override;
   std::vector<VocabularyImportRecord> vocabularyImports() const override;
 
+  void readTable(const TableColumns& t,
+                 const std::function<void(const TableRow&)>& row) const override;
+  void writeRows(const TableColumns& t, const std::vector<TableRow>& rows) override;
+
  private:
   void requireWritable() const;
   detail::WriteScope writeScope();

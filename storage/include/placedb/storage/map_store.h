@@ -10,6 +10,7 @@
 // that writes runs inside the open Transaction, or in one of its own when none is open. All
 // failures throw StorageError (a placedb::Error) whose message names the map.
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -17,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "placedb/storage/map_copy.h"
 #include "placedb/storage/records.h"
 #include "placedb/storage/storage_error.h"
 
@@ -256,6 +258,12 @@ class MapStore {
   // Vocabulary imports. imported_at is set to now when empty.
   virtual std::int64_t recordVocabularyImport(const VocabularyImportRecord& import) = 0;
   virtual std::vector<VocabularyImportRecord> vocabularyImports() const = 0;
+
+  // Whole tables, for copyMap(): every row of `t` in primary-key order, and rows written as
+  // they are (no checksums computed: a copy keeps the sums it read).
+  virtual void readTable(const TableColumns& t,
+                         const std::function<void(const TableRow&)>& row) const = 0;
+  virtual void writeRows(const TableColumns& t, const std::vector<TableRow>& rows) = 0;
 };
 
 }  // namespace placedb::storage
