@@ -45,7 +45,7 @@ nlohmann::json inspectMap(const std::string& path) {
   const auto store_owner = storage::openMapStore(path, storage::OpenMode::kReadOnly);
   storage::MapStore& store = *store_owner;
   nlohmann::json info;
-  info["path"] = path;
+  info["path"] = storage::mapDisplayName(path);  // a URI without its password
   // Committed frames may still sit in the write-ahead log (while a writer has the map open, or
   // after a crash): they count too. SQLite names the log after the file a link points to.
   if (storage::isServerMap(path)) {
