@@ -154,6 +154,18 @@ TEST_F(PgCli, CredentialsNeverShowAndRefusalsHaveTheirCodes) {
   for (const auto& text : {mapped.out, mapped.err, info.out, info.err, readBytes(log)})
     EXPECT_EQ(text.find("open-sesame"), std::string::npos) << text;
   EXPECT_NE(info.out.find("postgresql://cli_robot@/" + db), std::string::npos) << info.out;
+  // A role that may only read queries the map and is refused writing it (exit 6).
+  pgAdmin(server_, "DROP ROLE IF EXISTS cli_reader");
+  pgAdmin(server_, "CREATE ROLE cli_reader LOGIN PASSWORD 'read-only-sesame'");
+  pgAdmin(uri, "GRANT SELECT ON ALL TABLES IN SCHEMA public TO cli_reader");
+  const std::string reader = "postgresql://cli_reader:read-only-sesame@/" + db + "?" + host;
+  auto read = placedb({"info", reader}, dir_);
+  EXPECT_EQ(read.exit_code, 0) << describe(read);
+  EXPECT_NE(read.out.find("frames 5"), std::string::npos) << read.out;
+  auto write = placedb({"map", reader, list, "--new-session"}, dir_);
+  expectCleanError(write, 6, "permission denied");
+  EXPECT_EQ(write.err.find("read-only-sesame"), std::string::npos) << write.err;
+
   PGconn* conn = PQconnectdb(uri.c_str());
   PGresult* r = PQexec(conn,
                        "SELECT count(*) FROM sessions s, settings t WHERE "
