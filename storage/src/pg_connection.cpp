@@ -1,8 +1,52 @@
 #include "pg_connection.h"
 
+#include <cctype>
 #include <cstring>
 
 namespace placedb::storage {
+
+namespace {
+
+// libpq decodes %XX in a URI; PGPASSWORD is taken as it is.
+std::string percentDecoded(const std::string& text) {
+  std::string out;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (text[i] == '%' && i + 2 < text.size() &&
+        std::isxdigit(static_cast<unsigned char>(text[i + 1])) &&
+        std::isxdigit(static_cast<unsigned char>(text[i + 2]))) {
+      out.push_back(static_cast<char>(std::stoi(text.substr(i + 1, 2), nullptr, 16)));
+      i += 2;
+    } else {
+      out.push_back(text[i]);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string mapPassword(const std::string& uri) {
+  if (!isServerMap(uri)) return {};
+  const std::size_t query = uri.find('?');
+  if (query != std::string::npos) {
+    std::size_t start = query + 1;
+    while (start < uri.size()) {
+      std::size_t end = uri.find('&', start);
+      if (end == std::string::npos) end = uri.size();
+      if (uri.compare(start, 9, "password=") == 0)
+        return percentDecoded(uri.substr(start + 9, end - start - 9));
+      start = end + 1;
+    }
+  }
+  const std::size_t authority = uri.find("://") + 3;
+  std::size_t end = uri.find_first_of("/?#", authority);
+  if (end == std::string::npos) end = uri.size();
+  const std::size_t at = uri.rfind('@', end);
+  if (at == std::string::npos || at < authority) return {};
+  const std::size_t colon = uri.find(':', authority);
+  if (colon == std::string::npos || colon > at) return {};
+  return percentDecoded(uri.substr(colon + 1, at - colon - 1));
+}
 
 std::string mapDisplayName(const std::string& map) {
   if (!isServerMap(map)) return map;
@@ -318,8 +362,28 @@ CellValue PgResult::cell(int row, int column) const {
 
 // ---- PgConnection ----
 
+std::string PgConnection::scrubbed(std::string text) const {
+  for (const std::string& secret : secrets_) {
+    if (secret.empty()) continue;
+    const std::string shown =
+        secret.size() > 8 && secret.find("://") != std::string::npos ? label_ : std::string("***");
+    for (std::size_t at = text.find(secret); at != std::string::npos;
+         at = text.find(secret, at + shown.size()))
+      text.replace(at, secret.size(), shown);
+  }
+  return text;
+}
+
 PgConnection::PgConnection(const std::string& uri, std::string label, int connect_timeout_s)
     : label_(std::move(label)) {
+  // libpq may quote the URI in a message about its syntax: neither it nor its password (as
+  // written or decoded) may reach one.
+  secrets_ = {uri, mapPassword(uri)};
+  if (const std::size_t at = uri.find('@'); at != std::string::npos) {
+    const std::size_t colon = uri.find(':', uri.find("://") + 3);
+    if (colon != std::string::npos && colon < at)
+      secrets_.push_back(uri.substr(colon + 1, at - colon - 1));
+  }
   // The URI comes last so that its own settings (connect_timeout=, application_name=) win;
   // libpq also reads PGPASSFILE, PGSSLMODE and the other PG* variables for what it leaves out.
   const std::string timeout = std::to_string(connect_timeout_s);
@@ -333,15 +397,23 @@ PgConnection::PgConnection(const std::string& uri, std::string label, int connec
     exec("SET client_min_messages = warning");
     return;
   }
-  const std::string reason = conn_ ? firstLine(PQerrorMessage(conn_)) : "out of memory";
+  const std::string reason =
+      scrubbed(conn_ ? firstLine(PQerrorMessage(conn_)) : std::string("out of memory"));
   ErrorCode code = ErrorCode::kServerUnreachable;
   std::string what = "cannot reach the server";
+  // A URI libpq cannot parse never reached a server: that is the caller's argument.
+  const bool tried = reason.find("connection to server") != std::string::npos ||
+                     reason.find("could not") != std::string::npos ||
+                     reason.find("timeout") != std::string::npos;
   // libpq gives no SQLSTATE for a refused connection; its messages and flags tell the cases.
-  if (conn_ && (PQconnectionNeedsPassword(conn_) ||
-                reason.find("authentication failed") != std::string::npos ||
-                reason.find("no password supplied") != std::string::npos ||
-                (reason.find("role \"") != std::string::npos &&
-                 reason.find("does not exist") != std::string::npos))) {
+  if (!tried) {
+    code = ErrorCode::kInvalidArgument;
+    what = "not a valid connection URI";
+  } else if (conn_ && (PQconnectionNeedsPassword(conn_) ||
+                       reason.find("authentication failed") != std::string::npos ||
+                       reason.find("no password supplied") != std::string::npos ||
+                       (reason.find("role \"") != std::string::npos &&
+                        reason.find("does not exist") != std::string::npos))) {
     code = ErrorCode::kAuthRefused;
     what = "the server refused the credentials";
   } else if (reason.find("database \"") != std::string::npos &&
@@ -360,8 +432,8 @@ void PgConnection::fail(PGresult* result, const std::string& sql, const std::str
   const char* state = result ? PQresultErrorField(result, PG_DIAG_SQLSTATE) : nullptr;
   const std::string sqlstate = state ? state : "";
   const std::string message =
-      firstLine(result && *PQresultErrorMessage(result) ? PQresultErrorMessage(result)
-                                                        : PQerrorMessage(conn_));
+      scrubbed(firstLine(result && *PQresultErrorMessage(result) ? PQresultErrorMessage(result)
+                                                                 : PQerrorMessage(conn_)));
   PQclear(result);
   ErrorCode code = errorCodeForSqlState(sqlstate);
   if (sqlstate.empty() && PQstatus(conn_) != CONNECTION_OK) code = ErrorCode::kServerUnreachable;

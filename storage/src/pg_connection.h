@@ -117,10 +117,13 @@ class PgConnection final : public TransactionControl {
 
  private:
   [[noreturn]] void fail(PGresult* result, const std::string& sql, const std::string& what);
+  // `text` with the URI and its password replaced (by the label, by ***).
+  std::string scrubbed(std::string text) const;
   PgResult check(PGresult* result, const std::string& sql, const std::string& what);
 
   PGconn* conn_ = nullptr;
   std::string label_;
+  std::vector<std::string> secrets_;                       // the URI and its password, never shown
   std::unordered_map<std::string, std::string> prepared_;  // SQL -> statement name
 };
 

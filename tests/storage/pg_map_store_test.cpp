@@ -40,6 +40,19 @@ TEST(MapDisplayName, DropsThePasswordAndNothingElse) {
   EXPECT_EQ(mapDisplayName("postgresql://:s3cret@h/fleet?password=other"), "postgresql://@h/fleet");
   EXPECT_TRUE(isServerMap("postgres://h/db"));
   EXPECT_FALSE(isServerMap("postgresql.placedb"));
+  EXPECT_EQ(mapPassword("postgresql://robot:s%40cret@h/db"), "s@cret");
+  EXPECT_EQ(mapPassword("postgresql:///db?host=/x&password=p%26q&user=r"), "p&q");
+  EXPECT_EQ(mapPassword("postgresql://robot@h/db"), "");
+}
+
+// libpq quotes a URI it cannot parse; neither the URI nor its password may reach the message.
+TEST(MapDisplayName, AMalformedUriIsAnInvalidArgumentWithoutItsPassword) {
+  std::string message;
+  EXPECT_EQ(codeOf([&] { openMapStore("postgresql://robot:s3cret@[::1/db", OpenMode::kReadOnly); },
+                   &message),
+            ErrorCode::kInvalidArgument);
+  EXPECT_EQ(message.find("s3cret"), std::string::npos) << message;
+  EXPECT_NE(message.find("postgresql://robot@[::1/db"), std::string::npos) << message;
 }
 
 TEST(PgMapStore, SecondWriterIsRefusedAsMapBusyReadersAreNot) {

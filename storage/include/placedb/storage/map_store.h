@@ -50,6 +50,9 @@ bool isServerMap(const std::string& map);
 // (the user:password part loses ":password", a password= parameter is dropped).
 std::string mapDisplayName(const std::string& map);
 
+// The password a server URI holds (user:password@ or password=, percent-decoded), or "".
+std::string mapPassword(const std::string& map);
+
 // Opens the map `map` names: a PostgreSQL map for a server URI, a SQLite file otherwise.
 class MapStore;
 std::unique_ptr<MapStore> openMapStore(const std::string& map, OpenMode mode,
