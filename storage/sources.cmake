@@ -39,6 +39,7 @@ target_sources(placedb_storage PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/row_checksums.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/pg_connection.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_check.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/pg_pipeline.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_store.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_store_words.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_store_state.cpp

@@ -432,9 +432,15 @@ void PgConnection::fail(PGresult* result, const std::string& sql, const std::str
   const char* state = result ? PQresultErrorField(result, PG_DIAG_SQLSTATE) : nullptr;
   const std::string sqlstate = state ? state : "";
   const std::string message =
-      scrubbed(firstLine(result && *PQresultErrorMessage(result) ? PQresultErrorMessage(result)
-                                                                 : PQerrorMessage(conn_)));
+      firstLine(result && *PQresultErrorMessage(result) ? PQresultErrorMessage(result)
+                                                        : PQerrorMessage(conn_));
   PQclear(result);
+  fail(sqlstate, message, sql, what);
+}
+
+void PgConnection::fail(const std::string& sqlstate, const std::string& raw_message,
+                        const std::string& sql, const std::string& what) {
+  const std::string message = scrubbed(firstLine(raw_message.c_str()));
   ErrorCode code = errorCodeForSqlState(sqlstate);
   if (sqlstate.empty() && PQstatus(conn_) != CONNECTION_OK) code = ErrorCode::kServerUnreachable;
   std::string text = what + ": " + message;
@@ -451,26 +457,23 @@ PgResult PgConnection::check(PGresult* result, const std::string& sql, const std
 }
 
 PgResult PgConnection::run(const char* sql, const PgParams& params) {
-  auto found = prepared_.find(sql);
-  if (found == prepared_.end()) {
-    const std::string name = "placedb_" + std::to_string(prepared_.size());
-    check(PQprepare(conn_, name.c_str(), sql, params.size(), params.types().data()), sql,
-          "cannot prepare statement");
-    found = prepared_.emplace(sql, name).first;
-  }
+  flush();
+  const std::string& name = prepare(sql, params);
   const auto values = params.values();
   const auto lengths = params.lengths();
   const std::vector<int> formats(params.size(), 1);
-  return check(PQexecPrepared(conn_, found->second.c_str(), params.size(), values.data(),
-                              lengths.data(), formats.data(), 1),
+  return check(PQexecPrepared(conn_, name.c_str(), params.size(), values.data(), lengths.data(),
+                              formats.data(), 1),
                sql, "statement failed");
 }
 
 void PgConnection::exec(const std::string& sql) {
+  flush();
   check(PQexec(conn_, sql.c_str()), sql.size() < 200 ? sql : std::string(), "on map " + label_);
 }
 
 std::int64_t PgConnection::queryInt(const std::string& sql) {
+  flush();
   PGresult* result = PQexec(conn_, sql.c_str());
   check(result, sql, "query failed").release();
   const std::int64_t value = PQntuples(result) > 0 && !PQgetisnull(result, 0, 0)
@@ -485,9 +488,19 @@ bool PgConnection::inTransaction() const {
   return status == PQTRANS_INTRANS || status == PQTRANS_INERROR || status == PQTRANS_ACTIVE;
 }
 
-void PgConnection::beginWrite() { exec("BEGIN"); }
+void PgConnection::beginWrite() {
+  exec("BEGIN");
+  writing_ = true;
+}
 
 void PgConnection::commit() {
+  try {
+    flush();
+  } catch (...) {
+    rollbackQuietly();
+    throw;
+  }
+  writing_ = false;
   // COMMIT of a transaction in which a statement failed only rolls back, without an error: the
   // frame must not look committed.
   if (PQtransactionStatus(conn_) == PQTRANS_INERROR) {
@@ -504,10 +517,16 @@ void PgConnection::commit() {
 }
 
 void PgConnection::rollback() {
+  std::string state, message, sql;
+  drain(&state, &message, &sql);  // the transaction ends anyway: its failures do not matter
+  writing_ = false;
   if (inTransaction()) exec("ROLLBACK");
 }
 
 void PgConnection::rollbackQuietly() noexcept {
+  std::string state, message, sql;
+  drain(&state, &message, &sql);
+  writing_ = false;
   if (conn_ && inTransaction()) PQclear(PQexec(conn_, "ROLLBACK"));
 }
 

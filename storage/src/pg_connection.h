@@ -101,6 +101,13 @@ class PgConnection final : public TransactionControl {
 
   // Runs `sql` as a statement prepared on this connection at first use (one round trip after).
   PgResult run(const char* sql, const PgParams& params = PgParams());
+  // For a write whose result is not needed: inside a write transaction it is sent at once
+  // (libpq's pipeline mode) and its result read at the next flush(), which every other call
+  // makes first (a read, the commit), so a frame's writes share round trips. Its failure is
+  // thrown there, naming it. Outside a write transaction it runs at once, as run().
+  void send(const char* sql, const PgParams& params = PgParams());
+  // Reads the result of every statement sent; throws the first failure (pg_pipeline.cpp).
+  void flush();
   // Runs one or more statements without parameters (simple query protocol), text results.
   void exec(const std::string& sql);
   // A one-off query without parameters returning one integer, text results.
@@ -117,13 +124,26 @@ class PgConnection final : public TransactionControl {
 
  private:
   [[noreturn]] void fail(PGresult* result, const std::string& sql, const std::string& what);
+  [[noreturn]] void fail(const std::string& sqlstate, const std::string& message,
+                         const std::string& sql, const std::string& what);
+  // The name of `sql` prepared on this connection, preparing it (sent, in pipeline mode).
+  const std::string& prepare(const char* sql, const PgParams& params);
+  struct Sent {
+    std::string sql;
+    bool prepare;  // a PQsendPrepare, whose failure means the statement is not prepared
+  };
+  // Reads every sent result and leaves pipeline mode; the first failure, if any, in *state,
+  // *message and *sql. Never throws.
+  bool drain(std::string* state, std::string* message, std::string* sql) noexcept;
   // `text` with the URI and its password replaced (by the label, by ***).
   std::string scrubbed(std::string text) const;
   PgResult check(PGresult* result, const std::string& sql, const std::string& what);
 
   PGconn* conn_ = nullptr;
   std::string label_;
-  std::vector<std::string> secrets_;                       // the URI and its password, never shown
+  std::vector<std::string> secrets_;  // the URI and its password, never shown
+  bool writing_ = false;              // inside a write transaction: send() pipelines
+  std::vector<Sent> sent_;            // statements whose results are not read yet
   std::unordered_map<std::string, std::string> prepared_;  // SQL -> statement name
 };
 

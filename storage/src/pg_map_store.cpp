@@ -195,7 +195,7 @@ std::int64_t PgMapStore::beginSession(const std::string& source,
       keys.push_back(key);
       values.push_back(value);
     }
-    db_->run(
+    db_->send(
         "INSERT INTO settings (session_id, key, value) SELECT $1, k, v FROM unnest($2::text[], "
         "$3::text[]) AS t(k, v)",
         detail::PgParams().add(id).addArray(keys).addArray(values));
@@ -206,8 +206,8 @@ std::int64_t PgMapStore::beginSession(const std::string& source,
 
 void PgMapStore::setSourceDigest(std::int64_t session_id, const std::string& digest) {
   auto scope = writeScope();
-  db_->run("UPDATE sessions SET source_digest = $2 WHERE id = $1",
-           detail::PgParams().add(session_id).add(digest));
+  db_->send("UPDATE sessions SET source_digest = $2 WHERE id = $1",
+            detail::PgParams().add(session_id).add(digest));
   scope.commit();
 }
 
@@ -336,7 +336,7 @@ std::optional<FrameRecord> PgMapStore::lastFrame() const {
 
 void PgMapStore::insertLocation(const LocationRecord& l) {
   auto scope = writeScope();
-  db_->run(
+  db_->send(
       "INSERT INTO locations (id, session_id, weight, tier, created_frame) "
       "VALUES ($1, $2, $3, $4, $5)",
       detail::PgParams()
@@ -360,14 +360,14 @@ void PgMapStore::updateWeight(std::int64_t location_id, std::int64_t weight) {
 void PgMapStore::setTier(const std::vector<std::int64_t>& location_ids, Tier tier) {
   if (location_ids.empty()) return requireWritable();
   auto scope = writeScope();
-  db_->run("UPDATE locations SET tier = $2 WHERE id = ANY($1)",
-           detail::PgParams().addArray(location_ids).add(std::int64_t{static_cast<int>(tier)}));
+  db_->send("UPDATE locations SET tier = $2 WHERE id = ANY($1)",
+            detail::PgParams().addArray(location_ids).add(std::int64_t{static_cast<int>(tier)}));
   scope.commit();
 }
 
 void PgMapStore::deleteLocation(std::int64_t location_id) {
   auto scope = writeScope();
-  db_->run(
+  db_->send(
       "WITH p AS (DELETE FROM filter_posterior WHERE location_id = $1) "
       "DELETE FROM locations WHERE id = $1",
       detail::PgParams().add(location_id));
@@ -376,7 +376,7 @@ void PgMapStore::deleteLocation(std::int64_t location_id) {
 
 void PgMapStore::addCoveredFrame(std::int64_t location_id, std::int64_t frame_id) {
   auto scope = writeScope();
-  db_->run(
+  db_->send(
       "INSERT INTO location_frames (location_id, frame_id) VALUES ($1, $2) ON CONFLICT DO "
       "NOTHING",
       detail::PgParams().add(location_id).add(frame_id));

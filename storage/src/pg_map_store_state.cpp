@@ -24,22 +24,22 @@ constexpr const char* kPutState =
 
 void PgMapStore::putState(const std::string& key, const std::vector<std::uint8_t>& value) {
   auto scope = writeScope();
-  db_->run(kPutState,
-           detail::PgParams()
-               .add(key)
-               .addBytes(value.data(), value.size())
-               .add(std::int64_t{detail::stateChecksum(key, value.data(), value.size())}));
+  db_->send(kPutState,
+            detail::PgParams()
+                .add(key)
+                .addBytes(value.data(), value.size())
+                .add(std::int64_t{detail::stateChecksum(key, value.data(), value.size())}));
   scope.commit();
 }
 
 void PgMapStore::putState(const std::string& key, const std::string& value) {
   auto scope = writeScope();
   // Text is stored as its bytes: the column is bytea, as SQLite's is a BLOB-or-text.
-  db_->run(kPutState,
-           detail::PgParams()
-               .add(key)
-               .addBytes(value.data(), value.size())
-               .add(std::int64_t{detail::stateChecksum(key, value.data(), value.size())}));
+  db_->send(kPutState,
+            detail::PgParams()
+                .add(key)
+                .addBytes(value.data(), value.size())
+                .add(std::int64_t{detail::stateChecksum(key, value.data(), value.size())}));
   scope.commit();
 }
 
@@ -61,7 +61,7 @@ std::optional<std::string> PgMapStore::getStateText(const std::string& key) cons
 
 void PgMapStore::deleteState(const std::string& key) {
   auto scope = writeScope();
-  db_->run("DELETE FROM engine_state WHERE key = $1", detail::PgParams().add(key));
+  db_->send("DELETE FROM engine_state WHERE key = $1", detail::PgParams().add(key));
   scope.commit();
 }
 
@@ -180,7 +180,7 @@ void PgMapStore::putPosterior(const std::vector<std::pair<std::int64_t, double>>
   }
   // One statement, one round trip: both parts see the table as it was, so rows that stay are
   // updated rather than deleted and inserted again (which would collide on the key).
-  db_->run(
+  db_->send(
       "WITH gone AS (DELETE FROM filter_posterior WHERE location_id <> ALL($1)) "
       "INSERT INTO filter_posterior (location_id, probability) SELECT * FROM unnest($1::int8[], "
       "$2::float8[]) ON CONFLICT (location_id) DO UPDATE SET probability = excluded.probability",
@@ -200,7 +200,7 @@ std::vector<std::pair<std::int64_t, double>> PgMapStore::loadPosterior() const {
 
 void PgMapStore::putPlaceCode(std::int64_t location_id, const std::vector<std::int8_t>& code) {
   auto scope = writeScope();
-  db_->run(
+  db_->send(
       "INSERT INTO place_codes (location_id, code, checksum) VALUES ($1, $2, $3) "
       "ON CONFLICT (location_id) DO UPDATE SET code = excluded.code, checksum = excluded.checksum",
       detail::PgParams()
@@ -250,7 +250,7 @@ void PgMapStore::setWmAges(const std::vector<std::pair<std::int64_t, std::int64_
     ids.push_back(id);
     values.push_back(age);
   }
-  db_->run(
+  db_->send(
       "INSERT INTO wm_entries (location_id, wm_age) SELECT * FROM unnest($1::int8[], "
       "$2::int8[]) ON CONFLICT (location_id) DO UPDATE SET wm_age = excluded.wm_age",
       detail::PgParams().addArray(ids).addArray(values));

@@ -56,7 +56,7 @@ void PgMapStore::writeRows(const TableColumns& t, const std::vector<TableRow>& r
     }
     sql += ")";
   }
-  db_->run(sql.c_str(), params);
+  db_->send(sql.c_str(), params);
   scope.commit();
 }
 

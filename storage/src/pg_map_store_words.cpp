@@ -54,7 +54,7 @@ void PgMapStore::insertWords(const std::vector<WordRecord>& words) {
     sums.push_back(detail::wordChecksum(w.id, w.created_frame, static_cast<int>(w.type), w.dim,
                                         w.descriptor.data(), w.descriptor.size()));
   }
-  db_->run(
+  db_->send(
       "INSERT INTO words (id, created_frame, vocabulary_import_id, descriptor_type, dim, "
       "descriptor, source_frame, checksum) SELECT * FROM unnest($1::int8[], $2::int8[], "
       "$3::int8[], $4::int8[], $5::int8[], $6::bytea[], $7::int8[], $8::int8[])",
@@ -168,7 +168,7 @@ void PgMapStore::insertWordRefs(std::int64_t location_id, const std::vector<Word
     response.push_back(ref.response);
   }
   // Ordinals continue after the location's last one, in the order given.
-  db_->run(
+  db_->send(
       "INSERT INTO word_refs (location_id, ordinal, word_id, x, y, size, angle, response) "
       "SELECT $1, (SELECT coalesce(max(ordinal) + 1, 0) FROM word_refs WHERE location_id = $1) "
       "+ t.n - 1, t.w, t.x, t.y, t.s, t.a, t.r FROM unnest($2::int8[], $3::float8[], "
@@ -187,7 +187,7 @@ void PgMapStore::insertWordRefs(std::int64_t location_id, const std::vector<Word
 
 void PgMapStore::replaceWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs) {
   auto scope = writeScope();
-  db_->run("DELETE FROM word_refs WHERE location_id = $1", detail::PgParams().add(location_id));
+  db_->send("DELETE FROM word_refs WHERE location_id = $1", detail::PgParams().add(location_id));
   insertWordRefs(location_id, refs);
   scope.commit();
 }
@@ -257,7 +257,7 @@ void PgMapStore::insertLink(std::int64_t a, std::int64_t b, LinkType type,
                        "link of location " + std::to_string(a) + " to itself");
   }
   auto scope = writeScope();
-  db_->run(
+  db_->send(
       "INSERT INTO links (location_a, location_b, type, score) VALUES ($1, $2, $3, $4) "
       "ON CONFLICT (location_a, location_b, type) DO UPDATE SET score = excluded.score",
       detail::PgParams()
@@ -340,7 +340,7 @@ void PgMapStore::insertHypothesis(const HypothesisRecord& h) {
         &ClosurePose::ty, &ClosurePose::tz})
     p.add(pose ? std::optional<double>((*pose).*field) : std::nullopt);
   p.add(pose ? std::optional<std::int64_t>(pose->inliers) : std::nullopt);
-  db_->run(
+  db_->send(
       "INSERT INTO hypotheses (frame_id, best_location_id, posterior, loop_probability, "
       "accepted, rejected_reason, pose_qw, pose_qx, pose_qy, pose_qz, pose_tx, pose_ty, pose_tz, "
       "pose_inliers) VALUES ($1, $2, $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14)",
