@@ -7,6 +7,7 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config
   libsqlite3-dev sqlite3
+  libpq-dev postgresql  # maps on a PostgreSQL server; the tests start a throwaway one
   libopencv-dev
   libboost-serialization-dev
   libgtest-dev libgmock-dev

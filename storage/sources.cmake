@@ -9,6 +9,17 @@ add_custom_command(
   DEPENDS ${PLACEDB_MIGRATION_FILES} ${CMAKE_CURRENT_LIST_DIR}/cmake/embed_migrations.cmake
   COMMENT "Embedding schema migrations into placedb_storage"
   VERBATIM)
+# PostgreSQL's scripts (migrations/pg/) begin at 9, the schema version its maps start from.
+file(GLOB PLACEDB_PG_MIGRATION_FILES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/migrations/pg/*.sql)
+set(PLACEDB_PG_MIGRATIONS_CPP ${CMAKE_CURRENT_BINARY_DIR}/generated/pg_migrations_embedded.cpp)
+add_custom_command(
+  OUTPUT ${PLACEDB_PG_MIGRATIONS_CPP}
+  COMMAND ${CMAKE_COMMAND} -DMIGRATIONS_DIR=${PROJECT_SOURCE_DIR}/migrations/pg
+          -DOUTPUT=${PLACEDB_PG_MIGRATIONS_CPP} -DFUNCTION=pgMigrations -DFIRST=9
+          -P ${CMAKE_CURRENT_LIST_DIR}/cmake/embed_migrations.cmake
+  DEPENDS ${PLACEDB_PG_MIGRATION_FILES} ${CMAKE_CURRENT_LIST_DIR}/cmake/embed_migrations.cmake
+  COMMENT "Embedding PostgreSQL schema migrations into placedb_storage"
+  VERBATIM)
 
 target_sources(placedb_storage PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/database.cpp
@@ -17,12 +28,23 @@ target_sources(placedb_storage PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/map_files.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/migrations.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_store.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/map_store_memory.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/map_store_words.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/map_store_links.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/map_store_state.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_memory.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_words.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_links.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_state.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_tables.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/map_copy.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/records.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/row_checksums.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/wal_checkpointer.cpp
-  ${PLACEDB_MIGRATIONS_CPP})
+  ${CMAKE_CURRENT_LIST_DIR}/src/pg_connection.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_check.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/pg_pipeline.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_store.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_store_words.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_store_state.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_store_tables.cpp
+  ${PLACEDB_MIGRATIONS_CPP}
+  ${PLACEDB_PG_MIGRATIONS_CPP})
 target_include_directories(placedb_storage PRIVATE ${CMAKE_CURRENT_LIST_DIR}/src)

@@ -34,6 +34,8 @@ add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_demo.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/graph_export.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_export.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_copy.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/map_argument.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/output_guard.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_report.cpp)
 target_include_directories(placedb_cli PUBLIC ${CMAKE_CURRENT_LIST_DIR}/src)

@@ -14,12 +14,13 @@
 #include <vector>
 
 #include "placedb/storage/map_files.h"
-#include "placedb/storage/map_store.h"
+#include "placedb/storage/sqlite_map_store.h"
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
 using placedb::storage::MapStore;
+using placedb::storage::SqliteMapStore;
 
 double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -60,7 +61,7 @@ int main(int argc, char** argv) {
   std::int64_t next_word = 1;
   const auto insert_start = Clock::now();
   try {
-    MapStore store(path, placedb::storage::OpenMode::kReadWrite);
+    SqliteMapStore store(path, placedb::storage::OpenMode::kReadWrite);
     const auto session = store.beginSession("bench", {{"scale", std::to_string(scale)}}, "bench");
     std::vector<float> values(kDim);
     for (std::int64_t frame = 1; frame <= locations; ++frame) {

@@ -30,6 +30,8 @@ const std::vector<Category>& categories() {
       {ErrorCode::kVocabularyRefused, "VocabularyRefused", "vocabulary_refused"},
       {ErrorCode::kStorage, "StorageError", "storage"},
       {ErrorCode::kInternal, "InternalError", "internal"},
+      {ErrorCode::kServerUnreachable, "ServerUnreachable", "server_unreachable"},
+      {ErrorCode::kAuthRefused, "AuthRefused", "auth_refused"},
   };
   return table;
 }

@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "placedb/error.h"
+#include "placedb/storage/map_store.h"
 
 namespace py = pybind11;
 
@@ -37,7 +38,36 @@ py::object columnValue(sqlite3_stmt* statement, int column) {
 
 }  // namespace
 
+namespace {
+
+// A map on a server: the view through the store (its rows as copyMap reads a table).
+py::list serverLoopClosureRows(const std::string& uri) {
+  const auto store = storage::openMapStore(uri, storage::OpenMode::kReadOnly);
+  const storage::TableColumns view{"v_loop_closures",
+                                   {"location_a", "location_b", "score", "first_frame_a",
+                                    "first_frame_b", "session_a", "session_b"},
+                                   2};
+  py::list rows;
+  store->readTable(view, [&](const storage::TableRow& values) {
+    py::dict row;
+    for (std::size_t c = 0; c < values.size(); ++c) {
+      const storage::CellValue& v = values[c];
+      py::object value = py::none();
+      if (v.kind == storage::CellValue::Kind::kInteger) value = py::int_(v.integer);
+      if (v.kind == storage::CellValue::Kind::kReal) value = py::float_(v.real);
+      if (v.kind == storage::CellValue::Kind::kText) value = py::str(v.bytes);
+      if (v.kind == storage::CellValue::Kind::kBlob) value = py::bytes(v.bytes);
+      row[py::str(view.columns[c])] = value;
+    }
+    rows.append(row);
+  });
+  return rows;
+}
+
+}  // namespace
+
 py::list loopClosureRows(const std::string& path) {
+  if (storage::isServerMap(path)) return serverLoopClosureRows(path);
   if (!std::filesystem::exists(path))
     throw Error(ErrorCode::kIo, "map " + path + " does not exist");
   sqlite3* raw = nullptr;

@@ -221,5 +221,43 @@ StatementUse Database::cached(const char* sql) {
   return StatementUse(*found->second);
 }
 
+void Database::beginWrite() {
+  try {
+    exec("BEGIN IMMEDIATE");
+  } catch (const StorageError& error) {
+    if (error.code() != ErrorCode::kMapBusy) throw;
+    throw StorageError(ErrorCode::kMapBusy,
+                       "map " + label_ +
+                           " is busy: another connection holds a write transaction and did not "
+                           "finish within the busy timeout",
+                       error.sqliteCode(), error.sqliteMessage(), error.sql());
+  }
+}
+
+void Database::commit() {
+  try {
+    exec("COMMIT");
+  } catch (...) {
+    // A failed COMMIT (deferred foreign key, disk full) may leave the transaction open; the frame
+    // must then vanish as a whole.
+    rollbackQuietly();
+    throw;
+  }
+}
+
+void Database::rollback() {
+  if (inTransaction()) exec("ROLLBACK");
+}
+
+void Database::rollbackQuietly() noexcept {
+  if (inTransaction()) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+}
+
+void Database::beginRead() { exec("BEGIN DEFERRED"); }
+
+void Database::endReadQuietly() noexcept {
+  if (inTransaction()) sqlite3_exec(db_, "COMMIT", nullptr, nullptr, nullptr);
+}
+
 }  // namespace detail
 }  // namespace placedb::storage

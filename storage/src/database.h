@@ -9,6 +9,7 @@
 
 #include <sqlite3.h>
 
+#include "placedb/storage/map_store.h"
 #include "placedb/storage/storage_error.h"
 
 namespace placedb::storage::detail {
@@ -50,6 +51,7 @@ class Statement {
   std::optional<double> columnOptionalDouble(int column) const;
 
   const std::string& sql() const { return sql_; }
+  sqlite3_stmt* handle() const { return stmt_; }
 
  private:
   void check(int rc, const char* what) const;
@@ -73,11 +75,11 @@ class StatementUse {
   Statement* statement_;
 };
 
-class Database {
+class Database final : public TransactionControl {
  public:
   // flags as sqlite3_open_v2; the file name may be a URI when SQLITE_OPEN_URI is set.
   Database(const std::string& filename, int flags);
-  ~Database();
+  ~Database() override;
   Database(const Database&) = delete;
   Database& operator=(const Database&) = delete;
 
@@ -88,11 +90,20 @@ class Database {
   std::string queryText(const std::string& sql);
   // The statement for `sql`, prepared on first use and kept for the connection's life.
   StatementUse cached(const char* sql);
-  bool inTransaction() const { return sqlite3_get_autocommit(db_) == 0; }
+  bool inTransaction() const override { return sqlite3_get_autocommit(db_) == 0; }
+
+  // TransactionControl: BEGIN IMMEDIATE (kMapBusy after the busy timeout), COMMIT, ROLLBACK;
+  // reads under BEGIN DEFERRED.
+  void beginWrite() override;
+  void commit() override;
+  void rollback() override;
+  void rollbackQuietly() noexcept override;
+  void beginRead() override;
+  void endReadQuietly() noexcept override;
 
   // Shown in error messages (the map path).
   void setLabel(std::string label) { label_ = std::move(label); }
-  const std::string& label() const { return label_; }
+  const std::string& label() const override { return label_; }
 
  private:
   sqlite3* db_ = nullptr;

@@ -9,6 +9,7 @@
 #include "database.h"
 #include "map_file_check.h"
 #include "placedb/storage/map_files.h"
+#include "placedb/storage/map_store.h"
 #include "placedb/storage/migrations.h"
 #include "row_checksums.h"
 
@@ -179,6 +180,7 @@ std::unique_ptr<Database> openCheckConnection(const std::string& path, bool* wri
 }  // namespace
 
 CheckReport checkMap(const std::string& given_path, const CheckOptions& options) {
+  if (isServerMap(given_path)) return checkPgMap(given_path, options);
   const std::string path = detail::resolveMapPath(given_path);
   const detail::FileState state = detail::checkRawFile(path);
   if (state == detail::FileState::kMissing)

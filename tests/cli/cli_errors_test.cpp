@@ -9,7 +9,7 @@
 
 #include "cli_test_support.h"
 #include "placedb/options.h"
-#include "placedb/storage/map_store.h"
+#include "placedb/storage/sqlite_map_store.h"
 
 namespace placedb::testing {
 namespace {
@@ -125,7 +125,7 @@ TEST(CliErrors, MapHeldByAnotherWriterIsBusy) {
   auto source = tinySource(dir).string();
   auto path = (dir / "m.placedb").string();
   storage::OpenOptions options;
-  storage::MapStore writer(path, storage::OpenMode::kReadWrite, options);
+  storage::SqliteMapStore writer(path, storage::OpenMode::kReadWrite, options);
   expectCleanError(placedb({"map", path, source}, dir), 5);
 }
 

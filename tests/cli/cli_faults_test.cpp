@@ -12,8 +12,8 @@
 
 #include "cli_map_edits.h"
 #include "cli_scratch.h"
-#include "placedb/storage/map_store.h"
 #include "placedb/storage/migrations.h"
+#include "placedb/storage/sqlite_map_store.h"
 #include "vocabulary/vocabulary_file.h"
 
 namespace placedb::testing {
@@ -45,7 +45,7 @@ TEST(CliFaults, SecondNameForTheMapIsRefusedOrResolved) {
   ASSERT_EQ(resumed.exit_code, 0) << describe(resumed);
   EXPECT_TRUE(fs::is_symlink(dir / "link.placedb"));
   EXPECT_FALSE(fs::exists(dir / "link.placedb-wal"));
-  storage::MapStore store(a.string(), storage::OpenMode::kReadOnly);
+  storage::SqliteMapStore store(a.string(), storage::OpenMode::kReadOnly);
   EXPECT_EQ(store.frameCount(), 8);
 
   // A link to nothing is not followed to create a map elsewhere.
@@ -107,7 +107,7 @@ TEST(CliFaults, DamagedEngineValuesAreRefusedBeforeAnyWrite) {
   auto dir = scratchDir("CliFaults_values");
   auto good = mappedCopy(seq, dir, "good.placedb", {"--stop-after", "8"});
   const auto setCounter = [](const fs::path& map, const char* name, long long value) {
-    storage::MapStore store(map.string(), storage::OpenMode::kReadWrite);
+    storage::SqliteMapStore store(map.string(), storage::OpenMode::kReadWrite);
     auto counters = nlohmann::json::parse(*store.getStateText("engine.counters"));
     counters[name] = value;
     store.putState("engine.counters", counters.dump());
@@ -191,7 +191,7 @@ TEST(CliFaults, FullDiskUnderTheLogIsDiskFullWithWholeRows) {
   auto rest = placedb({"map", map, source, "--log", log, "-q"}, dir);
   ASSERT_EQ(rest.exit_code, 0) << describe(rest);
   expectWholeRows(log);
-  storage::MapStore store(map, storage::OpenMode::kReadOnly);
+  storage::SqliteMapStore store(map, storage::OpenMode::kReadOnly);
   EXPECT_EQ(store.frameCount(), 40);
 }
 
@@ -266,7 +266,7 @@ TEST(CliFaults, HangUpClosesTheMapCleanly) {
   mapping.signal(SIGHUP);
   auto stopped = mapping.wait();
   EXPECT_EQ(stopped.exit_code, 0) << describe(stopped);
-  storage::MapStore store(map, storage::OpenMode::kReadOnly);
+  storage::SqliteMapStore store(map, storage::OpenMode::kReadOnly);
   ASSERT_TRUE(store.lastSession());
   EXPECT_TRUE(store.lastSession()->clean_close);
 }
@@ -276,7 +276,7 @@ TEST(CliFaults, InfoCountsTheWriteAheadLogInTheSize) {
   auto dir = scratchDir("CliFaults_info_wal");
   auto map = mappedCopy(seq, dir, "m.placedb");
   // A reader keeps the log from being checkpointed into the map while this writer adds rows.
-  storage::MapStore writer(map.string(), storage::OpenMode::kReadWrite);
+  storage::SqliteMapStore writer(map.string(), storage::OpenMode::kReadWrite);
   auto tx = writer.begin();
   writer.putState("padding", std::vector<std::uint8_t>(3 << 20, 1));
   tx.commit();

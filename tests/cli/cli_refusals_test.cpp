@@ -9,7 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "cli_scratch.h"
-#include "placedb/storage/map_store.h"
+#include "placedb/storage/sqlite_map_store.h"
 
 namespace placedb::testing {
 namespace {
@@ -153,7 +153,7 @@ TEST(CliRefusals, ResumeTakesTheSessionsStoredExtractor) {
   ASSERT_EQ(first.exit_code, 0) << describe(first);
   auto rest = placedb({"map", map, source, "-q"}, dir);
   ASSERT_EQ(rest.exit_code, 0) << describe(rest);
-  storage::MapStore store(map, storage::OpenMode::kReadOnly);
+  storage::SqliteMapStore store(map, storage::OpenMode::kReadOnly);
   ASSERT_EQ(store.sessions().size(), 1u);
   EXPECT_EQ(store.frameCount(), 10);
   EXPECT_EQ(store.settings(1).at("extractor"), "kaze");
@@ -272,7 +272,7 @@ TEST(CliRefusals, ByteOrderMarkStartsAListOrAConfigHarmlessly) {
       dir);
   ASSERT_EQ(r.exit_code, 0) << describe(r);
   EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
-  storage::MapStore store(map, storage::OpenMode::kReadOnly);
+  storage::SqliteMapStore store(map, storage::OpenMode::kReadOnly);
   EXPECT_EQ(store.settings(1).at("t_loop"), "0.2");
   EXPECT_EQ(store.frameCount(), 4);
 }
@@ -291,7 +291,7 @@ TEST(CliRefusals, ListEditedBetweenStopAndResumeIsNotResumedSilently) {
   EXPECT_TRUE(bytesOf(map) == before);
   auto fresh = placedb({"map", map, list.string(), "--new-session", "-q"}, dir);
   ASSERT_EQ(fresh.exit_code, 0) << describe(fresh);
-  storage::MapStore store(map, storage::OpenMode::kReadOnly);
+  storage::SqliteMapStore store(map, storage::OpenMode::kReadOnly);
   EXPECT_EQ(store.sessions().size(), 2u);
   EXPECT_EQ(store.frameCount(), 10);
 }

@@ -9,7 +9,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "placedb/storage/map_store.h"
+#include "placedb/storage/sqlite_map_store.h"
 #include "test_paths.h"
 
 namespace placedb::cli {
@@ -30,7 +30,7 @@ std::string contentOf(const fs::path& p) {
 // 1's camera in 3's: the export inverts it) and 2-4 without a pose.
 fs::path makeMap(const ClosurePose& pose) {
   const auto path = placedb::testing::scratchDir("GraphExportPose") / "m.placedb";
-  storage::MapStore store(path.string(), storage::OpenMode::kReadWrite);
+  storage::SqliteMapStore store(path.string(), storage::OpenMode::kReadWrite);
   const std::int64_t session = store.beginSession("src", {}, "test");
   auto tx = store.begin();
   for (std::int64_t i = 1; i <= 4; ++i) {

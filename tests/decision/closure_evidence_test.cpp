@@ -12,6 +12,7 @@
 #include "map/engine_state.h"
 #include "map/state_keys.h"
 #include "placedb/options.h"
+#include "placedb/storage/sqlite_map_store.h"
 #include "test_paths.h"
 
 namespace placedb {
@@ -124,7 +125,7 @@ TEST(ClosureEvidence, OnlyThePlaceRightAfterInTheSameSessionContinues) {
 
 TEST(ClosureEvidence, SurvivesTheMapsCountersAndOlderMapsHaveNone) {
   const auto path = (testing::scratchDir("ClosureEvidence_counters") / "map.placedb").string();
-  storage::MapStore store(path, storage::OpenMode::kReadWrite);
+  storage::SqliteMapStore store(path, storage::OpenMode::kReadWrite);
   EngineCounters saved;
   saved.closure_evidence = runOf({-1.7, -2.3, -0.4});
   {

@@ -8,6 +8,7 @@
 #include "decision/closure_run.h"
 #include "map/engine_state.h"
 #include "map/state_keys.h"
+#include "placedb/storage/sqlite_map_store.h"
 #include "test_paths.h"
 
 namespace placedb {
@@ -97,7 +98,7 @@ TEST(ClosureRun, AJumpStartsANewRunThatKeepsTheHeadingOnlyWhenItFollowsClosely) 
 
 TEST(ClosureRun, SurvivesTheMapsCountersAndOlderMapsLoadARunOfOne) {
   const auto path = (testing::scratchDir("ClosureRun_counters") / "map.placedb").string();
-  storage::MapStore store(path, storage::OpenMode::kReadWrite);
+  storage::SqliteMapStore store(path, storage::OpenMode::kReadWrite);
   EngineCounters saved;
   saved.closure_run = runThrough({500, 501, 502, 503}, 40);
   saved.closure_run.session = 3;

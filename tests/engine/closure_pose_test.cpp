@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "engine_fixture.h"
-#include "placedb/storage/map_store.h"
+#include "placedb/storage/sqlite_map_store.h"
 
 namespace placedb::testing {
 namespace {
@@ -43,7 +43,7 @@ Mapped mapSamples(const std::string& name, const Options& options, std::size_t s
   }
   map->close();
   map.reset();
-  run.stored = storage::MapStore(path.string(), storage::OpenMode::kReadOnly).closurePoses();
+  run.stored = storage::SqliteMapStore(path.string(), storage::OpenMode::kReadOnly).closurePoses();
   return run;
 }
 

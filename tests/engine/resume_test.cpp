@@ -8,8 +8,8 @@
 
 #include "engine_fixture.h"
 #include "legacy_split_log.h"
-#include "placedb/storage/map_store.h"
 #include "placedb/storage/migrations.h"
+#include "placedb/storage/sqlite_map_store.h"
 #include "vocabulary/vocabulary.h"
 
 namespace placedb::testing {

@@ -7,6 +7,7 @@
 
 #include "engine_fixture.h"
 #include "file_bytes.h"
+#include "placedb/storage/sqlite_map_store.h"
 #include "vocabulary/vocabulary_file.h"
 
 namespace placedb::testing {
@@ -26,7 +27,7 @@ class VocabularyImport : public ::testing::Test {
       map->beginSession("first half");
       for (std::size_t i = 0; i < 40; ++i) map->process(seq_->images[i], i, seq_->paths[i]);
     }
-    storage::MapStore store(source.string(), storage::OpenMode::kReadOnly);
+    storage::SqliteMapStore store(source.string(), storage::OpenMode::kReadOnly);
     std::vector<std::int64_t> ids;
     for (std::int64_t id = 0; id <= store.maxWordId().value_or(-1); ++id) ids.push_back(id);
     vocab::VocabularyData data;
@@ -139,7 +140,7 @@ TEST_F(VocabularyImport, RefusalsLeaveTheMapAsItWas) {
     auto map = Map::open(path.string(), options);
     EXPECT_EQ(code([&] { map->importVocabulary(file.string(), false, VocabularyMode::kFixed); }),
               static_cast<int>(ErrorCode::kVocabularyRefused));
-    storage::MapStore store(path.string(), storage::OpenMode::kReadOnly);
+    storage::SqliteMapStore store(path.string(), storage::OpenMode::kReadOnly);
     EXPECT_EQ(store.wordCount(), 0);
     EXPECT_TRUE(store.vocabularyImports().empty());
     // Nothing half-done in RAM either: the map still maps from scratch.

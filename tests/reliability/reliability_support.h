@@ -17,7 +17,7 @@
 #include "child_process.h"
 #include "file_bytes.h"
 #include "placedb/storage/map_files.h"
-#include "placedb/storage/map_store.h"
+#include "placedb/storage/sqlite_map_store.h"
 #include "test_paths.h"
 
 namespace placedb::testing {
@@ -87,7 +87,7 @@ inline std::map<std::int64_t, StoredFrame> storedFrames(const std::filesystem::p
   std::map<std::int64_t, StoredFrame> out;
   // A map not fully made holds no frame (and a read-only open refuses it).
   if (schemaVersion(map) < storage::MapStore::currentSchemaVersion()) return out;
-  storage::MapStore store(map.string(), storage::OpenMode::kReadOnly);
+  storage::SqliteMapStore store(map.string(), storage::OpenMode::kReadOnly);
   for (const auto& session : store.sessions())
     for (const auto& f : store.frames(session.id)) {
       StoredFrame s;

@@ -12,7 +12,7 @@
 
 #include <gtest/gtest.h>
 
-#include "placedb/storage/map_store.h"
+#include "placedb/storage/sqlite_map_store.h"
 #include "storage_test_util.h"
 #include "test_paths.h"
 
@@ -44,7 +44,7 @@ TEST(Crash, KilledWriterLosesOnlyTheOpenFrame) {
   if (child == 0) {
     close(ready[0]);
     try {
-      MapStore store(path, OpenMode::kReadWrite);
+      SqliteMapStore store(path, OpenMode::kReadWrite);
       const auto session = store.beginSession("camera", {{"k", "v"}}, "test");
       for (int i = 0; i < kCommitted; ++i) testing::writeFrame(store, session, i, 20);
       // Frame kCommitted: written but never committed.
@@ -74,7 +74,7 @@ TEST(Crash, KilledWriterLosesOnlyTheOpenFrame) {
   waitpid(child, &status, 0);
   ASSERT_TRUE(WIFSIGNALED(status));
 
-  MapStore store(path, OpenMode::kReadWrite);  // the dead writer's lock went with it
+  SqliteMapStore store(path, OpenMode::kReadWrite);  // the dead writer's lock went with it
   EXPECT_EQ(queryText(path, "PRAGMA integrity_check"), "ok");
   EXPECT_EQ(queryText(path, "SELECT count(*) FROM pragma_foreign_key_check"), "0");
   const auto session = store.lastSession();
@@ -98,7 +98,7 @@ TEST(Crash, KilledWriterLosesOnlyTheOpenFrame) {
 TEST(Concurrency, ReaderSeesWholeFramesWhileWriterWrites) {
   const auto dir = placedb::testing::scratchDir("ReaderWhileWriting");
   const std::string path = (dir / "map.db").string();
-  MapStore writer(path, OpenMode::kReadWrite);
+  SqliteMapStore writer(path, OpenMode::kReadWrite);
   const auto session = writer.beginSession("camera", {}, "test");
   testing::writeFrame(writer, session, 0);
   constexpr int kFrames = 150;
@@ -108,7 +108,7 @@ TEST(Concurrency, ReaderSeesWholeFramesWhileWriterWrites) {
   std::string reader_error;  // written by the reader before reader_failed
   std::thread reader_thread([&] {
     try {
-      MapStore reader(path, OpenMode::kReadOnly);
+      SqliteMapStore reader(path, OpenMode::kReadOnly);
       std::int64_t previous = 0;
       while (!done.load()) {
         const std::int64_t frames = reader.frameCount();
@@ -152,7 +152,7 @@ TEST(Checkpoint, TheLogIsCopiedBackWhileTheWriterGoesOnAndGoneAfterClose) {
   constexpr std::uintmax_t kPage = 4096;
   std::uintmax_t largest = 0;
   {
-    MapStore writer(path, OpenMode::kReadWrite);
+    SqliteMapStore writer(path, OpenMode::kReadWrite);
     // 60 commits of ~1 MB each: 15,000 pages of log in all, several checkpoints' worth.
     const std::vector<std::uint8_t> blob(1 << 20, 0x5a);
     for (int i = 0; i < 60; ++i) {
@@ -169,16 +169,16 @@ TEST(Checkpoint, TheLogIsCopiedBackWhileTheWriterGoesOnAndGoneAfterClose) {
     EXPECT_EQ(writer.getState("blob.3")->size(), blob.size());
   }
   EXPECT_FALSE(std::filesystem::exists(wal)) << "the last connection removes the log";
-  MapStore reader(path, OpenMode::kReadOnly);
+  SqliteMapStore reader(path, OpenMode::kReadOnly);
   EXPECT_EQ(reader.getState("blob.0")->size(), std::size_t{1} << 20);
 }
 
 TEST(Concurrency, SecondPlacedbWriterIsRefused) {
   const auto dir = placedb::testing::scratchDir("SecondWriter");
   const std::string path = (dir / "map.db").string();
-  MapStore first(path, OpenMode::kReadWrite);
+  SqliteMapStore first(path, OpenMode::kReadWrite);
   try {
-    MapStore second(path, OpenMode::kReadWrite);
+    SqliteMapStore second(path, OpenMode::kReadWrite);
     FAIL() << "a second writer opened the map";
   } catch (const Error& error) {
     EXPECT_EQ(error.code(), ErrorCode::kMapBusy);
@@ -188,8 +188,8 @@ TEST(Concurrency, SecondPlacedbWriterIsRefused) {
   const pid_t child = fork();
   if (child == 0) {
     try {
-      MapStore reader(path, OpenMode::kReadOnly);
-      MapStore second(path, OpenMode::kReadWrite);
+      SqliteMapStore reader(path, OpenMode::kReadOnly);
+      SqliteMapStore second(path, OpenMode::kReadWrite);
       _exit(1);
     } catch (const Error& error) {
       _exit(error.code() == ErrorCode::kMapBusy ? 0 : 2);
@@ -205,7 +205,7 @@ TEST(Concurrency, ForeignWriteTransactionMakesBeginBusy) {
   const std::string path = (dir / "map.db").string();
   OpenOptions options;
   options.busy_timeout_ms = 100;
-  MapStore store(path, OpenMode::kReadWrite, options);
+  SqliteMapStore store(path, OpenMode::kReadWrite, options);
   const auto session = store.beginSession("camera", {}, "test");
   sqlite3* other = nullptr;
   ASSERT_EQ(sqlite3_open(path.c_str(), &other), SQLITE_OK);
@@ -231,7 +231,7 @@ TEST(DiskFull, FullMapFailsTheFrameWithDiskFull) {
   const std::string path = (dir / "map.db").string();
   OpenOptions options;
   options.max_page_count = 120;
-  MapStore store(path, OpenMode::kReadWrite, options);
+  SqliteMapStore store(path, OpenMode::kReadWrite, options);
   const auto session = store.beginSession("camera", {}, "test");
   int written = 0;
   try {

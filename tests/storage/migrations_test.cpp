@@ -9,8 +9,8 @@
 
 #include <gtest/gtest.h>
 
-#include "placedb/storage/map_store.h"
 #include "placedb/storage/migrations.h"
+#include "placedb/storage/sqlite_map_store.h"
 #include "storage_test_util.h"
 #include "test_paths.h"
 
@@ -45,7 +45,7 @@ std::vector<std::string> normalisedSchema(const std::string& path) {
 
 void expectRefused(const std::string& path, OpenMode mode, const std::string& reason_part) {
   try {
-    MapStore store(path, mode);
+    SqliteMapStore store(path, mode);
     ADD_FAILURE() << path << " was opened but should have been refused";
   } catch (const Error& error) {
     EXPECT_EQ(error.code(), ErrorCode::kMapRefused) << error.what();
@@ -97,7 +97,7 @@ TEST(Migrations, NewMapGetsCurrentVersionAndMark) {
   writeBytes(empty, "");
   for (const std::string& path : {missing, empty}) {
     {
-      MapStore store(path, OpenMode::kReadWrite);
+      SqliteMapStore store(path, OpenMode::kReadWrite);
       EXPECT_EQ(store.schemaVersion(), currentSchemaVersion());
       EXPECT_FALSE(store.readOnly());
     }
@@ -125,7 +125,7 @@ TEST(Migrations, UpgradesFromEveryOlderVersionToCurrent) {
       EXPECT_EQ(db.rows("PRAGMA user_version").at(0), std::to_string(version));
     }
     {
-      MapStore store(path, OpenMode::kReadWrite);
+      SqliteMapStore store(path, OpenMode::kReadWrite);
       EXPECT_EQ(store.schemaVersion(), currentSchemaVersion());
       const auto session = store.beginSession("src", {}, "test");
       testing::writeFrame(store, session, 0);
@@ -145,7 +145,7 @@ TEST(Migrations, BuildMapAtVersionRejectsBadArguments) {
 TEST(Refusal, NewerMapNamesBothVersions) {
   const auto dir = placedb::testing::scratchDir("NewerMap");
   const std::string path = (dir / "newer.db").string();
-  { MapStore store(path, OpenMode::kReadWrite); }
+  { SqliteMapStore store(path, OpenMode::kReadWrite); }
   const int newer = currentSchemaVersion() + 1;
   {
     RawDb db(path);
@@ -204,7 +204,7 @@ TEST(Refusal, FilesThatAreNotSqlite) {
   fake_header[17] = 0x00;
   writeBytes((dir / "fake.db").string(), fake_header);
   const std::string before = readBytes((dir / "fake.db").string());
-  EXPECT_THROW(MapStore((dir / "fake.db").string(), OpenMode::kReadWrite), Error);
+  EXPECT_THROW(SqliteMapStore((dir / "fake.db").string(), OpenMode::kReadWrite), Error);
   EXPECT_EQ(readBytes((dir / "fake.db").string()), before);
 }
 
@@ -212,7 +212,7 @@ TEST(Refusal, TruncatedMap) {
   const auto dir = placedb::testing::scratchDir("TruncatedMap");
   const std::string path = (dir / "map.db").string();
   {
-    MapStore store(path, OpenMode::kReadWrite);
+    SqliteMapStore store(path, OpenMode::kReadWrite);
     const auto session = store.beginSession("src", {}, "test");
     for (int i = 0; i < 40; ++i) testing::writeFrame(store, session, i, 50);
   }
@@ -230,7 +230,7 @@ TEST(Refusal, TruncatedMap) {
 TEST(Refusal, ReadOnlyOpenOfMissingFileIsIoError) {
   const auto dir = placedb::testing::scratchDir("ReadOnlyMissing");
   try {
-    MapStore store((dir / "absent.db").string(), OpenMode::kReadOnly);
+    SqliteMapStore store((dir / "absent.db").string(), OpenMode::kReadOnly);
     FAIL() << "opened a missing map read-only";
   } catch (const Error& error) {
     EXPECT_EQ(error.code(), ErrorCode::kIo);
@@ -261,7 +261,7 @@ TEST(Migrations, SixToSevenAddsNullPoseColumns) {
         "VALUES (1, 0.5, 0.9, 1)");
   }
   {
-    MapStore store(path, OpenMode::kReadWrite);
+    SqliteMapStore store(path, OpenMode::kReadWrite);
     ASSERT_EQ(store.schemaVersion(), MapStore::currentSchemaVersion());
     auto old = store.hypothesis(1);
     ASSERT_TRUE(old);

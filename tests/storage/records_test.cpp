@@ -1,4 +1,6 @@
-// Every kind of record written and read back; constraints and read-only access.
+// Every kind of record written and read back; constraints and read-only access. The Records
+// tests run on both backends: on a SQLite file in storage_tests, and on a PostgreSQL database
+// in pg_storage_tests, which compiles this file again with PLACEDB_RECORDS_ON_PG.
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -7,20 +9,28 @@
 
 #include <gtest/gtest.h>
 
-#include "placedb/storage/map_store.h"
+#include "pg_test_server.h"
+#include "placedb/storage/sqlite_map_store.h"
 #include "storage_test_util.h"
 #include "test_paths.h"
 
 namespace placedb::storage {
 namespace {
 
-class Records : public ::testing::Test {
+// The parameter names the backend: "sqlite" (a file) or "postgresql" (a fresh database).
+class Records : public ::testing::TestWithParam<std::string> {
  protected:
   void SetUp() override {
-    dir_ = placedb::testing::scratchDir(
-        std::string("Records_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    path_ = (dir_ / "map.db").string();
-    store_ = std::make_unique<MapStore>(path_, OpenMode::kReadWrite);
+    if (GetParam() == "postgresql") {
+      PLACEDB_REQUIRE_PG_SERVER(server);
+      path_ = placedb::testing::freshPgDatabase(server, placedb::testing::pgTestDatabaseName());
+    } else {
+      dir_ = placedb::testing::scratchDir(
+          std::string("Records_") +
+          ::testing::UnitTest::GetInstance()->current_test_info()->name());
+      path_ = (dir_ / "map.db").string();
+    }
+    store_ = openMapStore(path_, OpenMode::kReadWrite);
     session_ = store_->beginSession("/data/lip6", {{"T_loop", "0.11"}, {"wm_max", "300"}}, "0.1.0");
   }
 
@@ -41,7 +51,7 @@ class Records : public ::testing::Test {
   std::int64_t session_ = 0;
 };
 
-TEST_F(Records, Sessions) {
+TEST_P(Records, Sessions) {
   EXPECT_EQ(store_->settings(session_),
             (std::map<std::string, std::string>{{"T_loop", "0.11"}, {"wm_max", "300"}}));
   auto last = store_->lastSession();
@@ -68,7 +78,7 @@ TEST_F(Records, Sessions) {
   EXPECT_THROW(store_->reopenSession(999), Error);
 }
 
-TEST_F(Records, FramesWithAssignedAndGivenIds) {
+TEST_P(Records, FramesWithAssignedAndGivenIds) {
   EXPECT_FALSE(store_->lastFrameIndex(session_));
   FrameRecord first = sampleFrame(7);
   const auto first_id = store_->insertFrame(first);
@@ -106,7 +116,7 @@ TEST_F(Records, FramesWithAssignedAndGivenIds) {
   }
 }
 
-TEST_F(Records, LocationsTiersAndCoverage) {
+TEST_P(Records, LocationsTiersAndCoverage) {
   {
     Transaction tx = store_->begin();
     for (std::int64_t i = 1; i <= 3; ++i) {
@@ -152,7 +162,7 @@ TEST_F(Records, LocationsTiersAndCoverage) {
   EXPECT_EQ(store_->locationCount(), 1);
 }
 
-TEST_F(Records, WordsAndReferences) {
+TEST_P(Records, WordsAndReferences) {
   Transaction tx = store_->begin();
   FrameRecord f = sampleFrame(0);
   f.id = 1;
@@ -219,7 +229,7 @@ TEST_F(Records, WordsAndReferences) {
 
 // The bulk loads that restore working memory on open: descriptors straight into one matrix
 // (walking the table across short gaps, seeking across long ones) and bare signatures.
-TEST_F(Records, BulkDescriptorAndSignatureLoads) {
+TEST_P(Records, BulkDescriptorAndSignatureLoads) {
   constexpr int kDim = 8;
   auto value = [](std::int64_t id, int k) { return static_cast<float>(id) * 10.f + k; };
   {
@@ -278,7 +288,7 @@ TEST_F(Records, BulkDescriptorAndSignatureLoads) {
   EXPECT_TRUE(signatures.at(3).empty());
 }
 
-TEST_F(Records, LinksStoredOncePerPairAndType) {
+TEST_P(Records, LinksStoredOncePerPairAndType) {
   store_->insertFrame([&] {
     auto f = sampleFrame(0);
     f.id = 1;
@@ -318,7 +328,7 @@ TEST_F(Records, LinksStoredOncePerPairAndType) {
   EXPECT_EQ(store_->linksOfType(LinkType::kMerge).size(), 1u);
 }
 
-TEST_F(Records, HypothesesStateAndVocabularyImports) {
+TEST_P(Records, HypothesesStateAndVocabularyImports) {
   Transaction tx = store_->begin();
   for (std::int64_t i = 1; i <= 2; ++i) {
     auto f = sampleFrame(i);
@@ -397,7 +407,7 @@ TEST_F(Records, HypothesesStateAndVocabularyImports) {
   EXPECT_EQ(store_->importedWordIds(), (std::vector<std::int64_t>{1}));
 }
 
-TEST_F(Records, ForeignKeysAreEnforced) {
+TEST_P(Records, ForeignKeysAreEnforced) {
   store_->insertFrame([&] {
     auto f = sampleFrame(0);
     f.id = 1;
@@ -409,10 +419,14 @@ TEST_F(Records, ForeignKeysAreEnforced) {
     FAIL() << "a reference to an unknown word was stored";
   } catch (const StorageError& error) {
     EXPECT_EQ(error.code(), ErrorCode::kStorage);
-    EXPECT_EQ(error.sqliteCode(), 787);  // SQLITE_CONSTRAINT_FOREIGNKEY
+    if (GetParam() == "sqlite") {
+      EXPECT_EQ(error.sqliteCode(), 787);  // SQLITE_CONSTRAINT_FOREIGNKEY
+      EXPECT_NE(std::string(error.what()).find("FOREIGN KEY"), std::string::npos);
+    } else {
+      EXPECT_NE(std::string(error.what()).find("foreign key"), std::string::npos);
+    }
     EXPECT_NE(error.sql().find("INSERT INTO word_refs"), std::string::npos);
     EXPECT_NE(std::string(error.what()).find("INSERT INTO word_refs"), std::string::npos);
-    EXPECT_NE(std::string(error.what()).find("FOREIGN KEY"), std::string::npos);
   }
   EXPECT_TRUE(store_->loadWordRefs(1).empty());
 
@@ -424,7 +438,7 @@ TEST_F(Records, ForeignKeysAreEnforced) {
   EXPECT_THROW(store_->insertLocation({3, 77, 0, Tier::kWm, std::nullopt}), StorageError);
 }
 
-TEST_F(Records, TransactionRollsBackUnlessCommitted) {
+TEST_P(Records, TransactionRollsBackUnlessCommitted) {
   {
     Transaction tx = store_->begin();
     store_->insertFrame(sampleFrame(0));
@@ -447,9 +461,10 @@ TEST_F(Records, TransactionRollsBackUnlessCommitted) {
   EXPECT_EQ(store_->frameCount(), 1);
 }
 
-TEST_F(Records, ReadOnlyOpenCannotWrite) {
+TEST_P(Records, ReadOnlyOpenCannotWrite) {
   testing::writeFrame(*store_, session_, 0);
-  MapStore reader(path_, OpenMode::kReadOnly);
+  const auto reader_owner = openMapStore(path_, OpenMode::kReadOnly);
+  MapStore& reader = *reader_owner;
   EXPECT_TRUE(reader.readOnly());
   EXPECT_EQ(reader.frameCount(), 1);
   EXPECT_EQ(reader.loadWordRefs(1).size(), 4u);
@@ -465,6 +480,11 @@ TEST_F(Records, ReadOnlyOpenCannotWrite) {
     }
   }
 }
+
+#ifdef PLACEDB_RECORDS_ON_PG
+INSTANTIATE_TEST_SUITE_P(Postgresql, Records, ::testing::Values(std::string("postgresql")));
+#else
+INSTANTIATE_TEST_SUITE_P(Sqlite, Records, ::testing::Values(std::string("sqlite")));
 
 namespace {
 
@@ -495,7 +515,7 @@ TEST(ReadOnlyMedia, MapInReadOnlyFolderOpensForReadingOnly) {
   std::filesystem::create_directories(folder);
   const std::string path = (folder / "map.db").string();
   {
-    MapStore store(path, OpenMode::kReadWrite);
+    SqliteMapStore store(path, OpenMode::kReadWrite);
     const auto session = store.beginSession("src", {}, "test");
     for (int i = 0; i < 3; ++i) testing::writeFrame(store, session, i);
   }
@@ -509,7 +529,7 @@ TEST(ReadOnlyMedia, MapInReadOnlyFolderOpensForReadingOnly) {
                               fs::perms::others_exec);
   const int status = runAsUnprivileged([&] {
     {
-      MapStore reader(path, OpenMode::kReadOnly);
+      SqliteMapStore reader(path, OpenMode::kReadOnly);
       if (reader.frameCount() != 3 || reader.loadWordRefs(2).size() != 4) return 1;
       try {
         reader.insertLink(1, 2, LinkType::kNeighbour, 1.0);
@@ -519,7 +539,7 @@ TEST(ReadOnlyMedia, MapInReadOnlyFolderOpensForReadingOnly) {
       }
     }
     try {
-      MapStore writer(path, OpenMode::kReadWrite);
+      SqliteMapStore writer(path, OpenMode::kReadWrite);
       return 4;
     } catch (const Error& error) {
       if (error.code() != ErrorCode::kReadOnly) return 5;
@@ -532,6 +552,8 @@ TEST(ReadOnlyMedia, MapInReadOnlyFolderOpensForReadingOnly) {
                           "4 read-write open accepted, 9x child setup";
   EXPECT_EQ(testing::readBytes(path), before);
 }
+
+#endif  // PLACEDB_RECORDS_ON_PG
 
 }  // namespace
 }  // namespace placedb::storage

@@ -7,8 +7,8 @@
 
 #include <gtest/gtest.h>
 
-#include "placedb/storage/map_store.h"
 #include "placedb/storage/migrations.h"
+#include "placedb/storage/sqlite_map_store.h"
 #include "storage_test_util.h"
 #include "test_paths.h"
 
@@ -20,7 +20,7 @@ using testing::RawDb;
 // Three frames of words, a place code, a state value and a small kd-forest.
 std::string makeMap(const std::filesystem::path& dir) {
   const std::string path = (dir / "good.placedb").string();
-  MapStore store(path, OpenMode::kReadWrite);
+  SqliteMapStore store(path, OpenMode::kReadWrite);
   const std::int64_t session = store.beginSession("test", {}, "test");
   for (int i = 0; i < 3; ++i) testing::writeFrame(store, session, i);
   store.putPlaceCode(1, {1, -2, 3, -4});
@@ -31,7 +31,7 @@ std::string makeMap(const std::filesystem::path& dir) {
 
 std::string refusal(const std::string& path, const std::function<void(MapStore&)>& read) {
   try {
-    MapStore store(path, OpenMode::kReadWrite);
+    SqliteMapStore store(path, OpenMode::kReadWrite);
     read(store);
   } catch (const StorageError& error) {
     EXPECT_EQ(error.code(), ErrorCode::kMapRefused) << error.what();
@@ -109,7 +109,7 @@ TEST(RowChecksums, NonFiniteDescriptorIsRefused) {
   const auto dir = placedb::testing::scratchDir("RowChecksumsNaN");
   const std::string path = makeMap(dir);
   {
-    MapStore store(path, OpenMode::kReadWrite);
+    SqliteMapStore store(path, OpenMode::kReadWrite);
     std::vector<float> values(8, 1.0f);
     values[3] = std::numeric_limits<float>::quiet_NaN();
     store.insertWords({WordRecord::fromFloats(100, std::nullopt, values.data(), 8)});
@@ -122,7 +122,7 @@ TEST(RowChecksums, NonFiniteDescriptorIsRefused) {
 TEST(RowChecksums, KdNodeRowCountFollowsEveryWrite) {
   const auto dir = placedb::testing::scratchDir("RowChecksumsKdCount");
   const std::string path = (dir / "m.placedb").string();
-  MapStore store(path, OpenMode::kReadWrite);
+  SqliteMapStore store(path, OpenMode::kReadWrite);
   const auto recorded = [&] { return std::stoll(*store.getStateText("storage.kd_nodes.rows")); };
   EXPECT_EQ(recorded(), 0);
   store.writeKdNodes({{0, 0, 1, 2, 0, 0.5}, {1, 0, 1, 2, 0, 0.5}}, {}, false);
@@ -157,7 +157,7 @@ TEST(RowChecksums, OlderMapGetsChecksumsOnUpgrade) {
         "VALUES (0, 0, 1, 2, 3, 0.5)");
   }
   {
-    MapStore store(path, OpenMode::kReadWrite);
+    SqliteMapStore store(path, OpenMode::kReadWrite);
     EXPECT_EQ(store.schemaVersion(), MapStore::currentSchemaVersion());
     loadFloats(store, {1, 2});
     EXPECT_EQ(store.placeCodes().size(), 1u);

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "file_bytes.h"
-#include "placedb/storage/map_store.h"
+#include "placedb/storage/sqlite_map_store.h"
 
 namespace placedb::storage::testing {
 

@@ -9,11 +9,13 @@
 
 #include "commands.h"
 #include "exit_codes.h"
+#include "map_argument.h"
 #include "map_summary.h"
 #include "placedb/error.h"
 #include "placedb/map.h"
 #include "placedb/options.h"
 #include "placedb/storage/map_check.h"
+#include "placedb/storage/map_store.h"
 
 namespace placedb::cli {
 namespace {
@@ -49,7 +51,10 @@ nlohmann::json toJson(const std::string& path, const storage::CheckReport& repor
 std::string describe(const std::string& path, const storage::CheckReport& report) {
   std::string text = fmt::format("map {} (schema {})\n", path, report.schema_version);
   text += fmt::format("  pages, indexes and constraints: {}\n",
-                      report.constraints_checked
+                      storage::isServerMap(path)
+                          ? "the server's (constraints always enforced; pages: data checksums "
+                            "or pg_amcheck)"
+                      : report.constraints_checked
                           ? "checked (SQLite's integrity_check)"
                           : "checked, CHECK constraints not (the file could only be opened "
                             "read-only)");
@@ -71,8 +76,7 @@ std::string describe(const std::string& path, const storage::CheckReport& report
 }
 
 int runCheck(const std::string& path, bool json, bool quiet) {
-  if (!std::filesystem::exists(path))
-    throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", path));
+  requireExistingMap(path);
   storage::CheckOptions options;
   const bool terminal = isatty(STDERR_FILENO) == 1;
   if (!quiet)
@@ -121,7 +125,9 @@ Command addCheckCommand(CLI::App& parent) {
       "Examples:\n"
       "  placedb check run.placedb\n"
       "  placedb check run.placedb --json | jq '.findings'");
-  app->add_option("MAP", *path, "map file")->required();
+  app->add_option("MAP", *path, "map: a file or a postgresql:// URI")
+      ->required()
+      ->transform(mapArgument());
   app->add_flag("--json", *json, "print one JSON object: ok, rows_checked, findings");
   app->add_flag("-q,--quiet", *quiet, "no progress on stderr");
   return {app, [path, json, quiet]() { return runCheck(*path, *json, *quiet); }};

@@ -8,6 +8,7 @@
 #include "exit_codes.h"
 #include "frame_log.h"
 #include "loop_matrix.h"
+#include "map_argument.h"
 #include "run_series.h"
 
 namespace placedb::cli {
@@ -51,7 +52,9 @@ Command addEvalCommand(CLI::App& parent) {
                   "write PNG figures (precision-recall, score, vocabulary, quantisation error, "
                   "WM size, time per frame and by stage, loop matrix) into this folder");
   app->add_option("--map", request->map_path,
-                  "take the series the log lacks (vocabulary, WM, times) from this map");
+                  "take the series the log lacks (vocabulary, WM, times) from this map (a file "
+                  "or a postgresql:// URI)")
+      ->transform(mapArgument());
   app->add_option("--session", *session, "session of --map the log belongs to (default: last)");
   app->add_flag("--json", *json, "one JSON object, as score_loops.py --json");
   return {app, [request, json, session, app]() {

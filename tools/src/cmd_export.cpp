@@ -8,6 +8,7 @@
 
 #include "commands.h"
 #include "graph_export.h"
+#include "map_argument.h"
 #include "output_guard.h"
 #include "placedb/error.h"
 
@@ -50,7 +51,9 @@ Command addExportCommand(CLI::App& parent) {
       "  placedb export run.placedb graph.g2o              (the format from the extension)\n"
       "  placedb export run.placedb graph.graphml --format graphml\n"
       "  placedb export run.placedb graph/ --format csv");
-  app->add_option("MAP", request->map_path, "map file")->required();
+  app->add_option("MAP", request->map_path, "map: a file or a postgresql:// URI")
+      ->required()
+      ->transform(mapArgument());
   app->add_option("OUT", request->out, "file to write (a folder for csv)")->required();
   app->add_option("--format", request->format,
                   "g2o, graphml or csv; by default the extension of OUT (.g2o, .graphml)")

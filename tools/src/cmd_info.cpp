@@ -8,6 +8,7 @@
 #include <tuple>
 
 #include "commands.h"
+#include "map_argument.h"
 #include "map_summary.h"
 #include "placedb/error.h"
 #include "placedb/options.h"
@@ -32,26 +33,33 @@ const char* linkName(storage::LinkType type) {
 }  // namespace
 
 std::optional<Options> lastSessionOptions(const std::string& path) {
-  storage::MapStore store(path, storage::OpenMode::kReadOnly);
+  const auto store_owner = storage::openMapStore(path, storage::OpenMode::kReadOnly);
+  storage::MapStore& store = *store_owner;
   const auto last = store.lastSession();
   if (!last) return std::nullopt;
   return Options::fromStoredSettings(store.settings(last->id));
 }
 
 nlohmann::json inspectMap(const std::string& path) {
-  if (!std::filesystem::exists(path))
-    throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", path));
-  storage::MapStore store(path, storage::OpenMode::kReadOnly);
+  requireExistingMap(path);
+  const auto store_owner = storage::openMapStore(path, storage::OpenMode::kReadOnly);
+  storage::MapStore& store = *store_owner;
   nlohmann::json info;
-  info["path"] = path;
+  info["path"] = storage::mapDisplayName(path);  // a URI without its password
   // Committed frames may still sit in the write-ahead log (while a writer has the map open, or
   // after a crash): they count too. SQLite names the log after the file a link points to.
-  std::error_code ec;
-  const auto target = std::filesystem::canonical(path, ec);
-  const auto wal = std::filesystem::file_size(storage::walFile(target.string()), ec);
-  const std::uintmax_t wal_bytes = ec ? 0 : wal;
-  info["file_bytes"] = std::filesystem::file_size(path) + wal_bytes;
-  info["wal_bytes"] = wal_bytes;
+  if (storage::isServerMap(path)) {
+    // A map on a server has no file; its size is the server's business (pg_database_size).
+    info["file_bytes"] = nullptr;
+    info["wal_bytes"] = nullptr;
+  } else {
+    std::error_code ec;
+    const auto target = std::filesystem::canonical(path, ec);
+    const auto wal = std::filesystem::file_size(storage::walFile(target.string()), ec);
+    const std::uintmax_t wal_bytes = ec ? 0 : wal;
+    info["file_bytes"] = std::filesystem::file_size(path) + wal_bytes;
+    info["wal_bytes"] = wal_bytes;
+  }
   info["schema_version"] = store.schemaVersion();
   info["frames"] = store.frameCount();
   info["bad_frames"] = store.frameCount(storage::FrameOutcome::kBad);
@@ -128,11 +136,14 @@ namespace {
 
 std::string describe(const nlohmann::json& info) {
   std::string text = fmt::format(
-      "map {}: {:.1f} MiB, schema version {}\n"
+      "map {}: {}, schema version {}\n"
       "frames {} ({} bad), accepted loop closures {} ({} with a pose), loop-closure links {}\n"
       "words {} stored{}\n"
       "locations {} (STM {}, WM {}, LTM {})\n",
-      info["path"].get<std::string>(), info["file_bytes"].get<double>() / (1024.0 * 1024.0),
+      info["path"].get<std::string>(),
+      info["file_bytes"].is_null()
+          ? std::string("on a PostgreSQL server")
+          : fmt::format("{:.1f} MiB", info["file_bytes"].get<double>() / (1024.0 * 1024.0)),
       info["schema_version"].get<int>(), info["frames"].get<std::int64_t>(),
       info["bad_frames"].get<std::int64_t>(), info["accepted_closures"].get<std::int64_t>(),
       info["posed_closures"].get<std::int64_t>(), info["loop_closures"].get<std::int64_t>(),
@@ -191,7 +202,9 @@ Command addInfoCommand(CLI::App& parent) {
       "Examples:\n"
       "  placedb info run.placedb\n"
       "  placedb info run.placedb --json | jq '.sessions[].frames'");
-  app->add_option("MAP", *path, "map file")->required();
+  app->add_option("MAP", *path, "map: a file or a postgresql:// URI")
+      ->required()
+      ->transform(mapArgument());
   app->add_flag("--json", *json, "print one JSON object (all settings included)");
   return {app, [path, json]() {
             nlohmann::json info = inspectMap(*path);

@@ -5,6 +5,7 @@
 
 #include "commands.h"
 #include "live_source.h"
+#include "map_argument.h"
 #include "mapping_run.h"
 #include "settings_input.h"
 
@@ -45,7 +46,11 @@ Command addMapCommand(CLI::App& parent) {
       "live: each frame is the newest one, frames that arrive while the engine is busy are\n"
       "dropped and counted (progress and the summary show them), --fps caps the rate, Ctrl-C\n"
       "closes the session cleanly; a live source always starts a new session.\n\n"
-      "MAP is created when missing. If its last session ran over the same SOURCE and did not\n"
+      "MAP is a file, created when missing, or a map on a PostgreSQL server named by a libpq\n"
+      "URI (postgresql://USER@HOST/DB, postgresql:///DB?host=SOCKET_DIR): the database must\n"
+      "exist; its placedb tables are created when missing (scripts/pg-server.sh starts a\n"
+      "scratch server). A password in the URI is never shown; PGPASSFILE, ~/.pgpass and\n"
+      "sslmode= work as in psql. If its last session ran over the same SOURCE and did not\n"
       "reach its end (a crash, Ctrl-C or --stop-after), that session resumes with the first\n"
       "frame not yet processed; otherwise a new session starts. Frame numbers always count from\n"
       "the start of SOURCE. Unreadable images are recorded as bad frames with a warning.\n"
@@ -72,8 +77,11 @@ Command addMapCommand(CLI::App& parent) {
       "  placedb map run.placedb images/ --set t_loop=0.2 --set wm_max=300\n"
       "  placedb map run.placedb walk.mp4 --preset paper --stop-after 500   # later: same again\n"
       "  placedb map run.placedb run.bag --topic /camera/image_raw/compressed\n"
-      "  placedb map run.placedb camera:0 --fps 5          # Ctrl-C to stop");
-  app->add_option("MAP", request->map_path, "map file (SQLite)")->required();
+      "  placedb map run.placedb camera:0 --fps 5          # Ctrl-C to stop\n"
+      "  placedb map 'postgresql:///placedb?host=/tmp/pg' frames.txt   # a map on a server");
+  app->add_option("MAP", request->map_path, "map: a file (SQLite) or a postgresql:// URI")
+      ->required()
+      ->transform(mapArgument());
   app->add_option("SOURCE", request->source, "image folder, list file, video or ROS bag")
       ->required();
   app->add_option("--topic", request->source_options.topic,

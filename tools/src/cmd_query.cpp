@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "exit_codes.h"
 #include "image_source.h"
+#include "map_argument.h"
 #include "map_summary.h"
 #include "placedb/map.h"
 #include "placedb/storage/map_store.h"
@@ -23,8 +24,7 @@ struct QueryRequest {
 
 // The settings of the map's last session: localisation must extract features the same way.
 Options storedOptions(const std::string& map_path) {
-  if (!std::filesystem::exists(map_path))
-    throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", map_path));
+  requireExistingMap(map_path);
   auto options = lastSessionOptions(map_path);
   if (!options)
     throw Error(ErrorCode::kInvalidArgument,
@@ -171,7 +171,9 @@ Command addQueryCommand(CLI::App& parent) {
       "  placedb query run.placedb photo.jpg\n"
       "  placedb query run.placedb a.png b.png --top 3 --json\n"
       "  placedb query run.placedb second_run/frames.txt --json");
-  app->add_option("MAP", request->map_path, "map file")->required();
+  app->add_option("MAP", request->map_path, "map: a file or a postgresql:// URI")
+      ->required()
+      ->transform(mapArgument());
   app->add_option("IMAGE", request->images, "images to localise (or folders, list files)")
       ->required();
   app->add_option("--top,-k", request->top, "locations to print per image")

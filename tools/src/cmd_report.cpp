@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "map_argument.h"
 #include "report.h"
 
 namespace placedb::cli {
@@ -44,7 +45,9 @@ Command addReportCommand(CLI::App& parent) {
       "  placedb report run.placedb run.csv gt_pairs.txt --out report/ --window 10\n"
       "  placedb demo --out d && placedb report d/demo.placedb d/run.csv \\\n"
       "      d/sequence/gt_pairs.txt --out d/report");
-  app->add_option("MAP", request->map, "the map the run wrote")->required();
+  app->add_option("MAP", request->map, "the map the run wrote")
+      ->required()
+      ->transform(mapArgument());
   app->add_option("LOG", request->log, "its per-frame CSV log (`placedb map --log`)")->required();
   app->add_option("GT", request->gt,
                   "ground-truth pairs file (optional: without it closures are not judged)");

@@ -9,6 +9,7 @@
 #include <filesystem>
 
 #include "commands.h"
+#include "map_argument.h"
 #include "output_guard.h"
 #include "placedb/error.h"
 #include "placedb/map.h"
@@ -20,9 +21,9 @@
 namespace placedb::cli {
 
 vocab::VocabularyData wordsOfMap(const std::string& map_path) {
-  if (!std::filesystem::exists(map_path))
-    throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", map_path));
-  storage::MapStore store(map_path, storage::OpenMode::kReadOnly);
+  requireExistingMap(map_path);
+  const auto store_owner = storage::openMapStore(map_path, storage::OpenMode::kReadOnly);
+  storage::MapStore& store = *store_owner;
   vocab::VocabularyData data;
   auto last = store.lastSession();
   const auto imports = store.vocabularyImports();
@@ -115,7 +116,9 @@ int runImport(const VocabRequest& request) {
     throw Error(ErrorCode::kVocabularyRefused,
                 fmt::format("vocabulary file {} refused: its words are {} descriptors, not {}",
                             request.file, named, request.extractor));
-  const bool created = !std::filesystem::exists(request.map_path);
+  // A map on a server is a database placedb never deletes: a failed import leaves its tables.
+  const bool created =
+      !storage::isServerMap(request.map_path) && !std::filesystem::exists(request.map_path);
   std::size_t words = 0;
   try {
     auto map = Map::open(request.map_path, options);
@@ -147,7 +150,9 @@ Command addVocabCommand(CLI::App& parent) {
       "  placedb vocab import words.pvoc new.placedb --mode fixed");
   app->require_subcommand(1);
   CLI::App* exporter = app->add_subcommand("export", "Write every word of MAP to FILE");
-  exporter->add_option("MAP", request->map_path, "map file")->required();
+  exporter->add_option("MAP", request->map_path, "map: a file or a postgresql:// URI")
+      ->required()
+      ->transform(mapArgument());
   exporter->add_option("FILE", request->file, "vocabulary file to write")->required();
   const auto addFormat = [&request](CLI::App* command) {
     command
@@ -160,7 +165,9 @@ Command addVocabCommand(CLI::App& parent) {
   addFormat(exporter);
   CLI::App* importer = app->add_subcommand("import", "Load FILE's words into MAP");
   importer->add_option("FILE", request->file, "vocabulary file")->required();
-  importer->add_option("MAP", request->map_path, "map file")->required();
+  importer->add_option("MAP", request->map_path, "map: a file or a postgresql:// URI")
+      ->required()
+      ->transform(mapArgument());
   importer
       ->add_option("--mode", request->mode,
                    "fixed: only these words, none created; seed: start from them")

@@ -25,6 +25,7 @@ Command addSettingsCommand(CLI::App& parent);
 Command addExportCommand(CLI::App& parent);
 Command addReportCommand(CLI::App& parent);
 Command addCheckCommand(CLI::App& parent);
+Command addCopyCommand(CLI::App& parent);
 
 // --set, --config and --preset, shared by `map` and `demo`.
 void addSettingsOptions(CLI::App& app, SettingsInput& settings);

@@ -18,8 +18,8 @@ std::string oneLine(std::string text) {
 
 int exitCodeFor(ErrorCode code) {
   int value = static_cast<int>(code);
-  // Codes are published by error.h in 2..10; anything else is a bug reported as internal.
-  if (value < 2 || value > 10) return static_cast<int>(ErrorCode::kInternal);
+  // Codes are published by error.h in 2..12; anything else is a bug reported as internal.
+  if (value < 2 || value > 12) return static_cast<int>(ErrorCode::kInternal);
   return value;
 }
 
@@ -37,8 +37,10 @@ std::string exitCodeTable() {
          "   6  read-only: the map or its folder cannot be written\n"
          "   7  disk full (the map, the log or an export; nothing partial is left)\n"
          "   8  vocabulary file refused (magic, version, dimension, checksum, extractor)\n"
-         "   9  other storage (SQLite) failure\n"
+         "   9  other storage (SQLite or PostgreSQL) failure\n"
          "  10  internal error (a bug: please report it)\n"
+         "  11  server unreachable: the map's PostgreSQL server cannot be reached or went away\n"
+         "  12  server refused the credentials (wrong password, unknown role)\n"
          "Ctrl-C, SIGTERM or SIGHUP during `map` finishes the current frame, closes the map\n"
          "cleanly (resumable) and exits 0.\n";
 }

@@ -1,4 +1,5 @@
 #include "graph_export.h"
+#include "map_argument.h"
 
 #include <fmt/format.h>
 
@@ -207,9 +208,9 @@ void writeG2o(const MapGraph& graph, const std::filesystem::path& path) {
 }  // namespace
 
 MapGraph readMapGraph(const std::string& map_path) {
-  if (!std::filesystem::exists(map_path))
-    throw Error(ErrorCode::kIo, fmt::format("map {} does not exist", map_path));
-  storage::MapStore store(map_path, storage::OpenMode::kReadOnly);
+  requireExistingMap(map_path);
+  const auto store_owner = storage::openMapStore(map_path, storage::OpenMode::kReadOnly);
+  storage::MapStore& store = *store_owner;
 
   std::map<std::int64_t, GraphFrame> frame_of;  // frame id -> session and source index
   for (const auto& s : store.sessions())

@@ -30,6 +30,7 @@ int run(int argc, char** argv) {
       "  placedb info run.placedb                           what the map holds\n"
       "  placedb check run.placedb                          is it sound? (pages, checksums)\n"
       "  placedb export run.placedb g.g2o                   graph for a pose-graph optimiser\n"
+      "  placedb copy run.placedb postgresql://h/fleet      upload a map to a server (any way)\n"
       "  placedb demo --out demo-output                     all of it on a synthetic tour\n",
       PLACEDB_VERSION_STRING)};
   app.name("placedb");
@@ -54,7 +55,8 @@ int run(int argc, char** argv) {
       placedb::cli::addInfoCommand(app),     placedb::cli::addVocabCommand(app),
       placedb::cli::addEvalCommand(app),     placedb::cli::addDemoCommand(app),
       placedb::cli::addSettingsCommand(app), placedb::cli::addExportCommand(app),
-      placedb::cli::addReportCommand(app),   placedb::cli::addCheckCommand(app)};
+      placedb::cli::addReportCommand(app),   placedb::cli::addCheckCommand(app),
+      placedb::cli::addCopyCommand(app)};
 
   try {
     app.parse(argc, argv);

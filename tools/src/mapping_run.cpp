@@ -1,4 +1,5 @@
 #include "mapping_run.h"
+#include "map_argument.h"
 
 #include <fmt/format.h>
 
@@ -58,11 +59,10 @@ struct ResumeDecision {
 ResumeDecision sessionToResume(const std::string& map_path, const ImageSource& source,
                                bool new_session) {
   if (new_session) return {};
-  std::error_code ec;
-  if (!std::filesystem::exists(map_path, ec) || std::filesystem::file_size(map_path, ec) == 0)
-    return {};
+  if (mapFileIsNew(map_path)) return {};
   try {
-    storage::MapStore store(map_path, storage::OpenMode::kReadOnly);
+    const auto store_owner = storage::openMapStore(map_path, storage::OpenMode::kReadOnly);
+    storage::MapStore& store = *store_owner;
     auto last = store.lastSession();
     if (!last) return {};
     auto next = resumeIndex(*last, store.lastFrameIndex(last->id), source);

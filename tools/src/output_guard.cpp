@@ -7,12 +7,14 @@
 
 #include "placedb/error.h"
 #include "placedb/storage/map_files.h"
+#include "placedb/storage/map_store.h"
 
 namespace placedb::cli {
 
 void refuseMapAsOutput(const std::string& command, const std::string& map_path,
                        const std::string& output) {
   namespace fs = std::filesystem;
+  if (storage::isServerMap(map_path)) return;  // no file of the map can be an output
   std::error_code ec;
   const fs::path canonical_output = fs::weakly_canonical(output, ec);
   for (const auto& part : storage::mapFiles(map_path)) {

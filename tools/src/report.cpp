@@ -269,13 +269,15 @@ std::vector<GalleryEntry> otherSessionClosures(const CsvTable& log) {
 
 ReportSummary writeReport(const ReportRequest& request) {
   // Every refusal comes before DIR is touched.
-  requireReadableFile(request.map, "map");
+  if (!storage::isServerMap(request.map.string())) requireReadableFile(request.map, "map");
   requireReadableFile(request.log, "log");
   const bool judged = !request.gt.empty();
   if (judged) requireReadableFile(request.gt, "ground truth");
   requireWritableFolder(request.out);
 
-  storage::MapStore store(request.map.string(), storage::OpenMode::kReadOnly);
+  const auto store_owner =
+      storage::openMapStore(request.map.string(), storage::OpenMode::kReadOnly);
+  storage::MapStore& store = *store_owner;
   // The log names the session that wrote it: its thumbnails come from that session's frames.
   const std::optional<std::int64_t> wanted =
       request.session ? request.session : sessionOfLog(request.log);

@@ -30,7 +30,8 @@ std::vector<double> numericColumn(const CsvTable& log, const std::string& name) 
 
 void fillFromMap(RunSeries& series, const std::string& map_path,
                  std::optional<std::int64_t> session) {
-  storage::MapStore store(map_path, storage::OpenMode::kReadOnly);
+  const auto store_owner = storage::openMapStore(map_path, storage::OpenMode::kReadOnly);
+  storage::MapStore& store = *store_owner;
   if (!session) {
     auto last = store.lastSession();
     if (!last)

@@ -32,9 +32,8 @@ std::unique_ptr<Map> Map::open(const std::string& path, const Options& options, 
 }
 
 MapImpl::MapImpl(const std::string& path, const Options& options, Mode mode) : mode_(mode) {
-  store_ = std::make_unique<storage::MapStore>(path, mode == Mode::kLocalisation
-                                                         ? storage::OpenMode::kReadOnly
-                                                         : storage::OpenMode::kReadWrite);
+  store_ = storage::openMapStore(path, mode == Mode::kLocalisation ? storage::OpenMode::kReadOnly
+                                                                   : storage::OpenMode::kReadWrite);
   configure(options);
   restoreFromStore();
 }

@@ -7,15 +7,17 @@
 namespace placedb {
 
 enum class ErrorCode : int {
-  kInvalidArgument = 2,    // bad settings, bad command-line values
-  kIo = 3,                 // unreadable source, image, or file
-  kMapRefused = 4,         // not SQLite, not a placedb map, damaged, or newer than this binary
-  kMapBusy = 5,            // another writer holds the map
-  kReadOnly = 6,           // the map (or its folder) cannot be written
-  kDiskFull = 7,           // the disk or SQLite's page limit is full
-  kVocabularyRefused = 8,  // vocabulary file wrong magic/version/dimension/checksum/extractor
-  kStorage = 9,            // any other SQLite failure
-  kInternal = 10,          // a broken invariant: a bug
+  kInvalidArgument = 2,     // bad settings, bad command-line values
+  kIo = 3,                  // unreadable source, image, or file
+  kMapRefused = 4,          // not SQLite, not a placedb map, damaged, or newer than this binary
+  kMapBusy = 5,             // another writer holds the map
+  kReadOnly = 6,            // the map (or its folder) cannot be written
+  kDiskFull = 7,            // the disk or SQLite's page limit is full
+  kVocabularyRefused = 8,   // vocabulary file wrong magic/version/dimension/checksum/extractor
+  kStorage = 9,             // any other SQLite failure
+  kInternal = 10,           // a broken invariant: a bug
+  kServerUnreachable = 11,  // the map's database server cannot be reached (or went away)
+  kAuthRefused = 12,        // the map's database server refused the credentials
 };
 
 class Error : public std::runtime_error {

@@ -45,6 +45,9 @@ struct CheckReport {
 // Throws StorageError: kIo when the file is missing or unreadable, kMapRefused when it is not a
 // placedb map this binary can open (not SQLite, another application's, newer schema). Damage is
 // reported in the result, not thrown.
+// A map on a PostgreSQL server (a URI) gets the checksum, count and value checks; its pages and
+// keys are the server's (see schema/SCHEMA.md).
 CheckReport checkMap(const std::string& path, const CheckOptions& options = {});
+CheckReport checkPgMap(const std::string& uri, const CheckOptions& options = {});
 
 }  // namespace placedb::storage

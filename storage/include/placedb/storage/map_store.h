@@ -1,12 +1,16 @@
 #pragma once
-// MapStore: one placedb map file (SQLite) opened for reading and writing or for inspection.
+// MapStore: one placedb map opened for reading and writing or for inspection. The interface the
+// engine and the tools use; two backends implement it: a SQLite file (SqliteMapStore,
+// sqlite_map_store.h) and a PostgreSQL database named by a libpq URI (storage/src/pg_*.cpp).
+// openMapStore() picks one from the map's name, so nothing above storage knows which it has.
 //
-// Opening read-write creates a missing map, refuses files that are not SQLite, SQLite files
-// that are not placedb maps and maps newer than this binary (ErrorCode::kMapRefused, file left
-// untouched), takes an exclusive advisory lock (a second writer gets kMapBusy) and then applies
-// the missing migrations. Every method that writes runs inside the open Transaction, or in one
-// of its own when none is open. All failures throw StorageError (a placedb::Error).
+// Opening read-write creates a missing map, refuses what is not a placedb map and maps newer
+// than this binary (ErrorCode::kMapRefused, left untouched), takes the map's exclusive writer
+// lock (a second writer gets kMapBusy) and then applies the missing migrations. Every method
+// that writes runs inside the open Transaction, or in one of its own when none is open. All
+// failures throw StorageError (a placedb::Error) whose message names the map.
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -14,20 +18,16 @@
 #include <utility>
 #include <vector>
 
+#include "placedb/storage/map_copy.h"
 #include "placedb/storage/records.h"
 #include "placedb/storage/storage_error.h"
 
 namespace placedb::storage {
 
-namespace detail {
-class Database;
-class WalCheckpointer;
-}  // namespace detail
-
 enum class OpenMode { kReadWrite, kReadOnly };
 
 struct OpenOptions {
-  // How long a write waits for another connection's lock before kMapBusy.
+  // How long a write waits for another connection's lock before kMapBusy (SQLite).
   int busy_timeout_ms = 5000;
   // When > 0, caps the file at this many pages (SQLite's max_page_count): for disk-full tests.
   std::int64_t max_page_count = 0;
@@ -36,12 +36,51 @@ struct OpenOptions {
   // CPU (more when the file is not cached), which would make reopening a large map slow
   // whatever its working memory; larger maps rely on SQLITE_CORRUPT met while mapping (the frame
   // is rolled back, exit 4) and on `sqlite3 MAP 'pragma quick_check'`. 0 checks every size.
+  // (SQLite only: a PostgreSQL server checks its own pages.)
   std::int64_t integrity_check_max_bytes = std::int64_t{256} << 20;
+  // PostgreSQL: how long connecting may take before kServerUnreachable.
+  int connect_timeout_s = 10;
 };
 
-// BEGIN IMMEDIATE on construction; rolls back on destruction unless committed.
+// True when `map` names a map on a PostgreSQL server (a libpq URI: postgresql:// or
+// postgres://) rather than a file.
+bool isServerMap(const std::string& map);
+
+// The name of `map` to show in messages: a file path as given; a server URI without its password
+// (the user:password part loses ":password", a password= parameter is dropped).
+std::string mapDisplayName(const std::string& map);
+
+// The password a server URI holds (user:password@ or password=, percent-decoded), or "".
+std::string mapPassword(const std::string& map);
+
+// Opens the map `map` names: a PostgreSQL map for a server URI, a SQLite file otherwise.
+class MapStore;
+std::unique_ptr<MapStore> openMapStore(const std::string& map, OpenMode mode,
+                                       const OpenOptions& options = {});
+
+// One backend connection's transactions, as Transaction and ReadSnapshot drive them.
+class TransactionControl {
+ public:
+  virtual ~TransactionControl() = default;
+  virtual bool inTransaction() const = 0;
+  // A write transaction: kMapBusy when another connection keeps the map's write lock too long.
+  virtual void beginWrite() = 0;
+  // On failure no transaction is left open: the frame vanishes as a whole.
+  virtual void commit() = 0;
+  virtual void rollback() = 0;
+  // For destructors: never throws.
+  virtual void rollbackQuietly() noexcept = 0;
+  // A read transaction: one snapshot for many reads.
+  virtual void beginRead() = 0;
+  virtual void endReadQuietly() noexcept = 0;
+  // The map's name, for messages.
+  virtual const std::string& label() const = 0;
+};
+
+// Begins a write transaction on construction; rolls back on destruction unless committed.
 class Transaction {
  public:
+  explicit Transaction(TransactionControl* control);
   Transaction(Transaction&& other) noexcept;
   Transaction& operator=(Transaction&&) = delete;
   Transaction(const Transaction&) = delete;
@@ -50,19 +89,18 @@ class Transaction {
 
   void commit();
   void rollback();
-  bool active() const { return db_ != nullptr; }
+  bool active() const { return control_ != nullptr; }
 
  private:
-  friend class MapStore;
-  explicit Transaction(detail::Database* db);
-  detail::Database* db_;
+  TransactionControl* control_;
 };
 
-// A read transaction (BEGIN DEFERRED): many reads see one snapshot and share one lock, instead
-// of taking and dropping a read lock per statement. Ends on destruction; no-op when the
-// connection is already inside a transaction.
+// A read transaction: many reads see one snapshot and share one lock, instead of taking and
+// dropping a read lock per statement. Ends on destruction; no-op when the connection is already
+// inside a transaction.
 class ReadSnapshot {
  public:
+  explicit ReadSnapshot(TransactionControl* control);
   ReadSnapshot(ReadSnapshot&& other) noexcept;
   ReadSnapshot& operator=(ReadSnapshot&&) = delete;
   ReadSnapshot(const ReadSnapshot&) = delete;
@@ -70,151 +108,165 @@ class ReadSnapshot {
   ~ReadSnapshot();
 
  private:
-  friend class MapStore;
-  explicit ReadSnapshot(detail::Database* db);
-  detail::Database* db_;
+  TransactionControl* control_;
 };
+
+namespace detail {
+
+// Runs a MapStore write in the caller's transaction, or in one of its own when none is open.
+class WriteScope {
+ public:
+  explicit WriteScope(TransactionControl& control) {
+    if (!control.inTransaction()) own_.emplace(&control);
+  }
+  void commit() {
+    if (own_) own_->commit();
+  }
+
+ private:
+  std::optional<Transaction> own_;
+};
+
+}  // namespace detail
 
 class MapStore {
  public:
-  MapStore(const std::string& path, OpenMode mode, const OpenOptions& options = {});
-  ~MapStore();
+  MapStore() = default;
+  virtual ~MapStore() = default;
   MapStore(const MapStore&) = delete;
   MapStore& operator=(const MapStore&) = delete;
 
-  const std::string& path() const { return path_; }
-  bool readOnly() const { return read_only_; }
-  int schemaVersion() const;
+  // The map's name for messages: the file path, or the server URI without its password.
+  virtual const std::string& path() const = 0;
+  virtual bool readOnly() const = 0;
+  virtual int schemaVersion() const = 0;
   static int currentSchemaVersion();
 
   // One per processed frame: everything written for the frame commits together.
-  Transaction begin();
+  virtual Transaction begin() = 0;
   // For loading many rows at once (restoring memory on open), also on a read-only map.
-  ReadSnapshot readSnapshot() const;
+  virtual ReadSnapshot readSnapshot() const = 0;
 
   // Sessions.
-  std::int64_t beginSession(const std::string& source,
-                            const std::map<std::string, std::string>& settings,
-                            const std::string& software_version);
-  void setSourceDigest(std::int64_t session_id, const std::string& digest);
-  void endSession(std::int64_t session_id, bool clean);
+  virtual std::int64_t beginSession(const std::string& source,
+                                    const std::map<std::string, std::string>& settings,
+                                    const std::string& software_version) = 0;
+  virtual void setSourceDigest(std::int64_t session_id, const std::string& digest) = 0;
+  virtual void endSession(std::int64_t session_id, bool clean) = 0;
   // Marks an ended session as running again (a resumed session): ended_at NULL, not clean.
-  void reopenSession(std::int64_t session_id);
-  std::vector<SessionRecord> sessions() const;
-  std::optional<SessionRecord> lastSession() const;
-  std::map<std::string, std::string> settings(std::int64_t session_id) const;
+  virtual void reopenSession(std::int64_t session_id) = 0;
+  virtual std::vector<SessionRecord> sessions() const = 0;
+  virtual std::optional<SessionRecord> lastSession() const = 0;
+  virtual std::map<std::string, std::string> settings(std::int64_t session_id) const = 0;
 
   // Frames. A record with id 0 gets the next id from the database; a non-zero id is kept.
   // Within a transaction frames, words, locations and hypotheses may reference each other in
   // any insertion order: those foreign keys are checked at commit.
-  std::int64_t insertFrame(const FrameRecord& frame);
-  std::optional<FrameRecord> frame(std::int64_t frame_id) const;
-  std::vector<FrameRecord> frames(std::int64_t session_id) const;  // by source index
-  std::optional<std::int64_t> lastFrameIndex(std::int64_t session_id) const;
-  std::int64_t frameCount() const;
-  std::int64_t frameCount(std::int64_t session_id) const;
-  std::int64_t frameCount(FrameOutcome outcome) const;
-  std::optional<FrameRecord> lastFrame() const;  // the newest, over all sessions
+  virtual std::int64_t insertFrame(const FrameRecord& frame) = 0;
+  virtual std::optional<FrameRecord> frame(std::int64_t frame_id) const = 0;
+  virtual std::vector<FrameRecord> frames(std::int64_t session_id) const = 0;  // by source index
+  virtual std::optional<std::int64_t> lastFrameIndex(std::int64_t session_id) const = 0;
+  virtual std::int64_t frameCount() const = 0;
+  virtual std::int64_t frameCount(std::int64_t session_id) const = 0;
+  virtual std::int64_t frameCount(FrameOutcome outcome) const = 0;
+  virtual std::optional<FrameRecord> lastFrame() const = 0;  // the newest, over all sessions
 
   // Locations.
-  void insertLocation(const LocationRecord& location);
-  void updateWeight(std::int64_t location_id, std::int64_t weight);
-  void setTier(const std::vector<std::int64_t>& location_ids, Tier tier);
+  virtual void insertLocation(const LocationRecord& location) = 0;
+  virtual void updateWeight(std::int64_t location_id, std::int64_t weight) = 0;
+  virtual void setTier(const std::vector<std::int64_t>& location_ids, Tier tier) = 0;
   // Removes the location with its references, coverage and links (frames keep NULL).
-  void deleteLocation(std::int64_t location_id);
-  void addCoveredFrame(std::int64_t location_id, std::int64_t frame_id);
-  std::vector<std::int64_t> coveredFrames(std::int64_t location_id) const;
-  std::map<std::int64_t, std::vector<std::int64_t>> coveredFrames(
-      const std::vector<std::int64_t>& location_ids) const;
-  std::vector<LocationWeight> locationsInTier(Tier tier) const;  // by id
-  std::optional<LocationRecord> location(std::int64_t location_id) const;
-  std::int64_t locationCount() const;
+  virtual void deleteLocation(std::int64_t location_id) = 0;
+  virtual void addCoveredFrame(std::int64_t location_id, std::int64_t frame_id) = 0;
+  virtual std::vector<std::int64_t> coveredFrames(std::int64_t location_id) const = 0;
+  virtual std::map<std::int64_t, std::vector<std::int64_t>> coveredFrames(
+      const std::vector<std::int64_t>& location_ids) const = 0;
+  virtual std::vector<LocationWeight> locationsInTier(Tier tier) const = 0;  // by id
+  virtual std::optional<LocationRecord> location(std::int64_t location_id) const = 0;
+  virtual std::int64_t locationCount() const = 0;
 
   // Words.
-  void insertWords(const std::vector<WordRecord>& words);
+  virtual void insertWords(const std::vector<WordRecord>& words) = 0;
   // The words found, in the order asked; unknown ids are skipped.
-  std::vector<WordRecord> loadWords(const std::vector<std::int64_t>& word_ids) const;
+  virtual std::vector<WordRecord> loadWords(const std::vector<std::int64_t>& word_ids) const = 0;
   // Bulk form for loading an index: word_ids[i]'s float32 descriptor of `dim` values goes to row
   // i of `rows` (word_ids.size() x dim, contiguous) and its creating frame (or -1) to
   // created[i]. A word that is missing, or of another type or dimension, is kMapRefused.
-  void loadFloatDescriptors(const std::vector<std::int64_t>& word_ids, int dim, float* rows,
-                            std::int64_t* created) const;
-  std::int64_t wordCount() const;
-  std::optional<std::int64_t> maxWordId() const;
+  virtual void loadFloatDescriptors(const std::vector<std::int64_t>& word_ids, int dim, float* rows,
+                                    std::int64_t* created) const = 0;
+  virtual std::int64_t wordCount() const = 0;
+  virtual std::optional<std::int64_t> maxWordId() const = 0;
   // Words of imported vocabularies, ascending: they stay in the index whatever the tiers do.
-  std::vector<std::int64_t> importedWordIds() const;
+  virtual std::vector<std::int64_t> importedWordIds() const = 0;
 
   // Word references: a location's signature, kept in insertion order.
-  void insertWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs);
-  void replaceWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs);
-  std::vector<WordRef> loadWordRefs(std::int64_t location_id) const;
-  std::map<std::int64_t, std::vector<WordRef>> loadWordRefs(
-      const std::vector<std::int64_t>& location_ids) const;
+  virtual void insertWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs) = 0;
+  virtual void replaceWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs) = 0;
+  virtual std::vector<WordRef> loadWordRefs(std::int64_t location_id) const = 0;
+  virtual std::map<std::int64_t, std::vector<WordRef>> loadWordRefs(
+      const std::vector<std::int64_t>& location_ids) const = 0;
   // Only the word ids of each location's references, in order: a signature without keypoints.
-  std::map<std::int64_t, std::vector<std::int64_t>> loadWordIds(
-      const std::vector<std::int64_t>& location_ids) const;
-  std::vector<std::int64_t> wordsOfLocations(const std::vector<std::int64_t>& location_ids) const;
+  virtual std::map<std::int64_t, std::vector<std::int64_t>> loadWordIds(
+      const std::vector<std::int64_t>& location_ids) const = 0;
+  virtual std::vector<std::int64_t> wordsOfLocations(
+      const std::vector<std::int64_t>& location_ids) const = 0;
   // The inverted index: locations whose signature holds the word, ascending.
-  std::vector<std::int64_t> locationsOfWord(std::int64_t word_id) const;
+  virtual std::vector<std::int64_t> locationsOfWord(std::int64_t word_id) const = 0;
 
   // Links, stored once per unordered pair and type; inserting again updates the score.
-  void insertLink(std::int64_t a, std::int64_t b, LinkType type, std::optional<double> score);
-  std::vector<LinkRecord> links(std::int64_t location_id) const;
+  virtual void insertLink(std::int64_t a, std::int64_t b, LinkType type,
+                          std::optional<double> score) = 0;
+  virtual std::vector<LinkRecord> links(std::int64_t location_id) const = 0;
   // Every link of one type, by (location_a, location_b).
-  std::vector<LinkRecord> linksOfType(LinkType type) const;
-  std::int64_t linkCount(LinkType type) const;
+  virtual std::vector<LinkRecord> linksOfType(LinkType type) const = 0;
+  virtual std::int64_t linkCount(LinkType type) const = 0;
   // Frames whose loop-closure hypothesis was accepted (several frames merged into one location
   // that close on one place make one loop-closure link); `posed`: only those with a pose.
-  std::int64_t acceptedClosureCount(bool posed = false) const;
+  virtual std::int64_t acceptedClosureCount(bool posed = false) const = 0;
   // Locations linked to `location_id` (by `type`, or any link) that sit in `tier`, ascending.
-  std::vector<std::int64_t> linkedInTier(std::int64_t location_id, Tier tier,
-                                         std::optional<LinkType> type = std::nullopt) const;
+  virtual std::vector<std::int64_t> linkedInTier(
+      std::int64_t location_id, Tier tier, std::optional<LinkType> type = std::nullopt) const = 0;
 
   // Loop-closure hypotheses, one per frame.
-  void insertHypothesis(const HypothesisRecord& hypothesis);
-  std::optional<HypothesisRecord> hypothesis(std::int64_t frame_id) const;
+  virtual void insertHypothesis(const HypothesisRecord& hypothesis) = 0;
+  virtual std::optional<HypothesisRecord> hypothesis(std::int64_t frame_id) const = 0;
   // Every accepted hypothesis that carries a pose (schema 7), by frame id.
-  std::vector<ClosurePoseRecord> closurePoses() const;
+  virtual std::vector<ClosurePoseRecord> closurePoses() const = 0;
 
   // Engine state for an exact resume.
-  void putState(const std::string& key, const std::vector<std::uint8_t>& value);
-  void putState(const std::string& key, const std::string& value);
-  std::optional<std::vector<std::uint8_t>> getState(const std::string& key) const;
-  std::optional<std::string> getStateText(const std::string& key) const;
-  void deleteState(const std::string& key);
+  virtual void putState(const std::string& key, const std::vector<std::uint8_t>& value) = 0;
+  virtual void putState(const std::string& key, const std::string& value) = 0;
+  virtual std::optional<std::vector<std::uint8_t>> getState(const std::string& key) const = 0;
+  virtual std::optional<std::string> getStateText(const std::string& key) const = 0;
+  virtual void deleteState(const std::string& key) = 0;
   // The vocabulary's kd-forest: upserts and deletes nodes by (tree, node); with replace_all the
   // table is emptied first. loadKdNodes() returns every node, by tree and node.
-  void writeKdNodes(const std::vector<KdNodeRecord>& upserts,
-                    const std::vector<std::pair<int, std::int64_t>>& deletions, bool replace_all);
-  std::vector<KdNodeRecord> loadKdNodes() const;
+  virtual void writeKdNodes(const std::vector<KdNodeRecord>& upserts,
+                            const std::vector<std::pair<int, std::int64_t>>& deletions,
+                            bool replace_all) = 0;
+  virtual std::vector<KdNodeRecord> loadKdNodes() const = 0;
   // Replaces the whole stored posterior.
-  void putPosterior(const std::vector<std::pair<std::int64_t, double>>& posterior);
-  std::vector<std::pair<std::int64_t, double>> loadPosterior() const;  // by location id
+  virtual void putPosterior(const std::vector<std::pair<std::int64_t, double>>& posterior) = 0;
+  virtual std::vector<std::pair<std::int64_t, double>> loadPosterior() const = 0;  // by location id
 
   // Memory tiers (schema 4). Every location's place code, whatever its tier; and its age in the
   // transfer order (the order of entering STM/WM; a location brought back from LTM enters again).
-  void putPlaceCode(std::int64_t location_id, const std::vector<std::int8_t>& code);
-  std::vector<PlaceCodeRecord> placeCodes() const;  // by location id
-  std::optional<std::vector<std::int8_t>> placeCode(std::int64_t location_id) const;
-  void setWmAges(const std::vector<std::pair<std::int64_t, std::int64_t>>& ages);
+  virtual void putPlaceCode(std::int64_t location_id, const std::vector<std::int8_t>& code) = 0;
+  virtual std::vector<PlaceCodeRecord> placeCodes() const = 0;  // by location id
+  virtual std::optional<std::vector<std::int8_t>> placeCode(std::int64_t location_id) const = 0;
+  virtual void setWmAges(const std::vector<std::pair<std::int64_t, std::int64_t>>& ages) = 0;
   // Every location's age; its id where none was stored (maps made before schema 4).
-  std::map<std::int64_t, std::int64_t> wmAges() const;
+  virtual std::map<std::int64_t, std::int64_t> wmAges() const = 0;
 
   // Vocabulary imports. imported_at is set to now when empty.
-  std::int64_t recordVocabularyImport(const VocabularyImportRecord& import);
-  std::vector<VocabularyImportRecord> vocabularyImports() const;
+  virtual std::int64_t recordVocabularyImport(const VocabularyImportRecord& import) = 0;
+  virtual std::vector<VocabularyImportRecord> vocabularyImports() const = 0;
 
- private:
-  class WriteScope;
-  void requireWritable() const;
-  // kd_nodes' row count as the map recorded it (engine_state); refuses the map when damaged.
-  std::int64_t storedKdNodeRows() const;
-
-  std::string path_;
-  bool read_only_;
-  int lock_fd_ = -1;  // holds the writer's advisory lock
-  std::unique_ptr<detail::Database> db_;
-  std::unique_ptr<detail::WalCheckpointer> checkpointer_;  // writers only
+  // Whole tables, for copyMap(): every row of `t` in primary-key order, and rows written as
+  // they are (no checksums computed: a copy keeps the sums it read).
+  virtual void readTable(const TableColumns& t,
+                         const std::function<void(const TableRow&)>& row) const = 0;
+  virtual void writeRows(const TableColumns& t, const std::vector<TableRow>& rows) = 0;
 };
 
 }  // namespace placedb::storage

@@ -17,6 +17,9 @@ struct Migration {
 
 // Every migration, ordered by version (generated at build time).
 const std::vector<Migration>& migrations();
+// PostgreSQL's, from migrations/pg/: they begin at the version its maps start from (9) and
+// share every number with SQLite's, so both backends report one schema version.
+const std::vector<Migration>& pgMigrations();
 
 // The schema version this binary writes: the highest migration.
 int currentSchemaVersion();

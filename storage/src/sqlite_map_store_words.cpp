@@ -6,9 +6,8 @@
 #include <set>
 
 #include "database.h"
-#include "placedb/storage/map_store.h"
+#include "placedb/storage/sqlite_map_store.h"
 #include "row_checksums.h"
-#include "write_scope.h"
 
 namespace placedb::storage {
 namespace {
@@ -19,8 +18,8 @@ std::size_t bytesPerValue(DescriptorKind type) { return type == DescriptorKind::
 
 // ---- Words ----
 
-void MapStore::insertWords(const std::vector<WordRecord>& words) {
-  WriteScope scope(*this);
+void SqliteMapStore::insertWords(const std::vector<WordRecord>& words) {
+  auto scope = writeScope();
   auto s = db_->cached(
       "INSERT INTO words (id, created_frame, vocabulary_import_id, descriptor_type, dim, "
       "descriptor, source_frame, checksum) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)");
@@ -46,7 +45,7 @@ void MapStore::insertWords(const std::vector<WordRecord>& words) {
   scope.commit();
 }
 
-std::vector<WordRecord> MapStore::loadWords(const std::vector<std::int64_t>& word_ids) const {
+std::vector<WordRecord> SqliteMapStore::loadWords(const std::vector<std::int64_t>& word_ids) const {
   auto s = db_->cached(
       "SELECT id, created_frame, vocabulary_import_id, descriptor_type, dim, descriptor, "
       "source_frame, checksum FROM words WHERE id = ?1");
@@ -73,8 +72,8 @@ std::vector<WordRecord> MapStore::loadWords(const std::vector<std::int64_t>& wor
   return result;
 }
 
-void MapStore::loadFloatDescriptors(const std::vector<std::int64_t>& word_ids, int dim, float* rows,
-                                    std::int64_t* created) const {
+void SqliteMapStore::loadFloatDescriptors(const std::vector<std::int64_t>& word_ids, int dim,
+                                          float* rows, std::int64_t* created) const {
   if (!std::is_sorted(word_ids.begin(), word_ids.end()))
     throw StorageError(ErrorCode::kInvalidArgument, "loadFloatDescriptors: ids must be sorted");
   // Word ids rise with creation, and the words of working memory are mostly runs of recent ones:
@@ -127,13 +126,13 @@ void MapStore::loadFloatDescriptors(const std::vector<std::int64_t>& word_ids, i
   }
 }
 
-std::int64_t MapStore::wordCount() const {
+std::int64_t SqliteMapStore::wordCount() const {
   auto s = db_->cached("SELECT count(*) FROM words");
   s->step();
   return s->columnInt(0);
 }
 
-std::optional<std::int64_t> MapStore::maxWordId() const {
+std::optional<std::int64_t> SqliteMapStore::maxWordId() const {
   auto s = db_->cached("SELECT max(id) FROM words");
   s->step();
   return s->columnOptionalInt(0);
@@ -141,8 +140,8 @@ std::optional<std::int64_t> MapStore::maxWordId() const {
 
 // ---- Word references ----
 
-void MapStore::insertWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs) {
-  WriteScope scope(*this);
+void SqliteMapStore::insertWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs) {
+  auto scope = writeScope();
   std::int64_t ordinal = 0;
   {
     auto s = db_->cached("SELECT max(ordinal) FROM word_refs WHERE location_id = ?1");
@@ -167,8 +166,8 @@ void MapStore::insertWordRefs(std::int64_t location_id, const std::vector<WordRe
   scope.commit();
 }
 
-void MapStore::replaceWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs) {
-  WriteScope scope(*this);
+void SqliteMapStore::replaceWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs) {
+  auto scope = writeScope();
   {
     auto s = db_->cached("DELETE FROM word_refs WHERE location_id = ?1");
     s->bind(1, location_id);
@@ -178,7 +177,7 @@ void MapStore::replaceWordRefs(std::int64_t location_id, const std::vector<WordR
   scope.commit();
 }
 
-std::vector<WordRef> MapStore::loadWordRefs(std::int64_t location_id) const {
+std::vector<WordRef> SqliteMapStore::loadWordRefs(std::int64_t location_id) const {
   auto s = db_->cached(
       "SELECT word_id, x, y, size, angle, response FROM word_refs WHERE location_id = ?1 "
       "ORDER BY ordinal");
@@ -193,14 +192,14 @@ std::vector<WordRef> MapStore::loadWordRefs(std::int64_t location_id) const {
   return result;
 }
 
-std::map<std::int64_t, std::vector<WordRef>> MapStore::loadWordRefs(
+std::map<std::int64_t, std::vector<WordRef>> SqliteMapStore::loadWordRefs(
     const std::vector<std::int64_t>& location_ids) const {
   std::map<std::int64_t, std::vector<WordRef>> result;
   for (std::int64_t id : location_ids) result[id] = loadWordRefs(id);
   return result;
 }
 
-std::map<std::int64_t, std::vector<std::int64_t>> MapStore::loadWordIds(
+std::map<std::int64_t, std::vector<std::int64_t>> SqliteMapStore::loadWordIds(
     const std::vector<std::int64_t>& location_ids) const {
   auto s = db_->cached("SELECT word_id FROM word_refs WHERE location_id = ?1 ORDER BY ordinal");
   std::map<std::int64_t, std::vector<std::int64_t>> result;
@@ -213,7 +212,7 @@ std::map<std::int64_t, std::vector<std::int64_t>> MapStore::loadWordIds(
   return result;
 }
 
-std::vector<std::int64_t> MapStore::importedWordIds() const {
+std::vector<std::int64_t> SqliteMapStore::importedWordIds() const {
   // Read on every open: the partial index words_imported serves it without a scan of the whole
   // vocabulary (millions of words on a long map).
   auto s = db_->cached(
@@ -224,7 +223,7 @@ std::vector<std::int64_t> MapStore::importedWordIds() const {
   return ids;
 }
 
-std::vector<std::int64_t> MapStore::wordsOfLocations(
+std::vector<std::int64_t> SqliteMapStore::wordsOfLocations(
     const std::vector<std::int64_t>& location_ids) const {
   auto s = db_->cached("SELECT word_id FROM word_refs WHERE location_id = ?1");
   std::set<std::int64_t> words;
@@ -236,7 +235,7 @@ std::vector<std::int64_t> MapStore::wordsOfLocations(
   return {words.begin(), words.end()};
 }
 
-std::vector<std::int64_t> MapStore::locationsOfWord(std::int64_t word_id) const {
+std::vector<std::int64_t> SqliteMapStore::locationsOfWord(std::int64_t word_id) const {
   auto s = db_->cached(
       "SELECT DISTINCT location_id FROM word_refs WHERE word_id = ?1 ORDER BY location_id");
   s->bind(1, word_id);

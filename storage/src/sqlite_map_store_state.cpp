@@ -3,16 +3,15 @@
 #include <nlohmann/json.hpp>
 
 #include "database.h"
-#include "placedb/storage/map_store.h"
+#include "placedb/storage/sqlite_map_store.h"
 #include "row_checksums.h"
-#include "write_scope.h"
 
 namespace placedb::storage {
 
 // ---- Engine state ----
 
-void MapStore::putState(const std::string& key, const std::vector<std::uint8_t>& value) {
-  WriteScope scope(*this);
+void SqliteMapStore::putState(const std::string& key, const std::vector<std::uint8_t>& value) {
+  auto scope = writeScope();
   auto s = db_->cached(
       "INSERT INTO engine_state (key, value, checksum) VALUES (?1, ?2, ?3) "
       "ON CONFLICT (key) DO UPDATE SET value = excluded.value, checksum = excluded.checksum");
@@ -23,8 +22,8 @@ void MapStore::putState(const std::string& key, const std::vector<std::uint8_t>&
   scope.commit();
 }
 
-void MapStore::putState(const std::string& key, const std::string& value) {
-  WriteScope scope(*this);
+void SqliteMapStore::putState(const std::string& key, const std::string& value) {
+  auto scope = writeScope();
   auto s = db_->cached(
       "INSERT INTO engine_state (key, value, checksum) VALUES (?1, ?2, ?3) "
       "ON CONFLICT (key) DO UPDATE SET value = excluded.value, checksum = excluded.checksum");
@@ -35,7 +34,7 @@ void MapStore::putState(const std::string& key, const std::string& value) {
   scope.commit();
 }
 
-std::optional<std::vector<std::uint8_t>> MapStore::getState(const std::string& key) const {
+std::optional<std::vector<std::uint8_t>> SqliteMapStore::getState(const std::string& key) const {
   auto s = db_->cached("SELECT value, checksum FROM engine_state WHERE key = ?1");
   s->bind(1, key);
   if (!s->step()) return std::nullopt;
@@ -45,7 +44,7 @@ std::optional<std::vector<std::uint8_t>> MapStore::getState(const std::string& k
   return value;
 }
 
-std::optional<std::string> MapStore::getStateText(const std::string& key) const {
+std::optional<std::string> SqliteMapStore::getStateText(const std::string& key) const {
   auto s = db_->cached("SELECT value, checksum FROM engine_state WHERE key = ?1");
   s->bind(1, key);
   if (!s->step()) return std::nullopt;
@@ -55,15 +54,15 @@ std::optional<std::string> MapStore::getStateText(const std::string& key) const 
   return value;
 }
 
-void MapStore::deleteState(const std::string& key) {
-  WriteScope scope(*this);
+void SqliteMapStore::deleteState(const std::string& key) {
+  auto scope = writeScope();
   auto s = db_->cached("DELETE FROM engine_state WHERE key = ?1");
   s->bind(1, key);
   s->run();
   scope.commit();
 }
 
-std::int64_t MapStore::storedKdNodeRows() const {
+std::int64_t SqliteMapStore::storedKdNodeRows() const {
   const auto text = getStateText(detail::kKdNodeRowsKey);
   if (!text) detail::refuseDamagedRow(path_, "engine_state", detail::kKdNodeRowsKey, "is missing");
   try {
@@ -75,10 +74,10 @@ std::int64_t MapStore::storedKdNodeRows() const {
   detail::refuseDamagedRow(path_, "engine_state", detail::kKdNodeRowsKey, "is not a row count");
 }
 
-void MapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
-                            const std::vector<std::pair<int, std::int64_t>>& deletions,
-                            bool replace_all) {
-  WriteScope scope(*this);
+void SqliteMapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
+                                  const std::vector<std::pair<int, std::int64_t>>& deletions,
+                                  bool replace_all) {
+  auto scope = writeScope();
   std::int64_t rows = 0;
   if (replace_all) {
     auto s = db_->cached("DELETE FROM kd_nodes");
@@ -124,7 +123,7 @@ void MapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
   scope.commit();
 }
 
-std::vector<KdNodeRecord> MapStore::loadKdNodes() const {
+std::vector<KdNodeRecord> SqliteMapStore::loadKdNodes() const {
   std::vector<KdNodeRecord> out;
   auto s = db_->cached(
       "SELECT tree, node, left_child, right_child, split_dim, split_value, checksum FROM kd_nodes "
@@ -156,8 +155,8 @@ std::vector<KdNodeRecord> MapStore::loadKdNodes() const {
   return out;
 }
 
-void MapStore::putPosterior(const std::vector<std::pair<std::int64_t, double>>& posterior) {
-  WriteScope scope(*this);
+void SqliteMapStore::putPosterior(const std::vector<std::pair<std::int64_t, double>>& posterior) {
+  auto scope = writeScope();
   {
     auto s = db_->cached("DELETE FROM filter_posterior");
     s->run();
@@ -171,7 +170,7 @@ void MapStore::putPosterior(const std::vector<std::pair<std::int64_t, double>>& 
   scope.commit();
 }
 
-std::vector<std::pair<std::int64_t, double>> MapStore::loadPosterior() const {
+std::vector<std::pair<std::int64_t, double>> SqliteMapStore::loadPosterior() const {
   auto s =
       db_->cached("SELECT location_id, probability FROM filter_posterior ORDER BY location_id");
   std::vector<std::pair<std::int64_t, double>> result;
@@ -181,8 +180,8 @@ std::vector<std::pair<std::int64_t, double>> MapStore::loadPosterior() const {
 
 // ---- Vocabulary imports ----
 
-std::int64_t MapStore::recordVocabularyImport(const VocabularyImportRecord& v) {
-  WriteScope scope(*this);
+std::int64_t SqliteMapStore::recordVocabularyImport(const VocabularyImportRecord& v) {
+  auto scope = writeScope();
   auto s = db_->cached(
       "INSERT INTO vocabulary_imports (session_id, file, checksum, word_count, mode, imported_at, "
       "extractor, distance_unit, settings) "
@@ -203,7 +202,7 @@ std::int64_t MapStore::recordVocabularyImport(const VocabularyImportRecord& v) {
   return id;
 }
 
-std::vector<VocabularyImportRecord> MapStore::vocabularyImports() const {
+std::vector<VocabularyImportRecord> SqliteMapStore::vocabularyImports() const {
   auto s = db_->cached(
       "SELECT id, session_id, file, checksum, word_count, mode, imported_at, "
       "coalesce(extractor, ''), coalesce(distance_unit, ''), settings "

@@ -2,20 +2,19 @@
 #include <algorithm>
 
 #include "database.h"
-#include "placedb/storage/map_store.h"
-#include "write_scope.h"
+#include "placedb/storage/sqlite_map_store.h"
 
 namespace placedb::storage {
 
 // ---- Links ----
 
-void MapStore::insertLink(std::int64_t a, std::int64_t b, LinkType type,
-                          std::optional<double> score) {
+void SqliteMapStore::insertLink(std::int64_t a, std::int64_t b, LinkType type,
+                                std::optional<double> score) {
   if (a == b) {
     throw StorageError(ErrorCode::kInvalidArgument,
                        "link of location " + std::to_string(a) + " to itself");
   }
-  WriteScope scope(*this);
+  auto scope = writeScope();
   auto s = db_->cached(
       "INSERT INTO links (location_a, location_b, type, score) VALUES (?1, ?2, ?3, ?4) "
       "ON CONFLICT (location_a, location_b, type) DO UPDATE SET score = excluded.score");
@@ -27,7 +26,7 @@ void MapStore::insertLink(std::int64_t a, std::int64_t b, LinkType type,
   scope.commit();
 }
 
-std::vector<LinkRecord> MapStore::links(std::int64_t location_id) const {
+std::vector<LinkRecord> SqliteMapStore::links(std::int64_t location_id) const {
   auto s = db_->cached(
       "SELECT location_a, location_b, type, score FROM links WHERE location_a = ?1 "
       "UNION ALL SELECT location_a, location_b, type, score FROM links WHERE location_b = ?1 "
@@ -41,7 +40,7 @@ std::vector<LinkRecord> MapStore::links(std::int64_t location_id) const {
   return result;
 }
 
-std::vector<LinkRecord> MapStore::linksOfType(LinkType type) const {
+std::vector<LinkRecord> SqliteMapStore::linksOfType(LinkType type) const {
   auto s = db_->cached(
       "SELECT location_a, location_b, type, score FROM links WHERE type = ?1 ORDER BY 1, 2");
   s->bind(1, std::int64_t{static_cast<int>(type)});
@@ -51,8 +50,8 @@ std::vector<LinkRecord> MapStore::linksOfType(LinkType type) const {
   return result;
 }
 
-std::vector<std::int64_t> MapStore::linkedInTier(std::int64_t location_id, Tier tier,
-                                                 std::optional<LinkType> type) const {
+std::vector<std::int64_t> SqliteMapStore::linkedInTier(std::int64_t location_id, Tier tier,
+                                                       std::optional<LinkType> type) const {
   auto s = db_->cached(
       "SELECT DISTINCT k.other FROM ("
       "  SELECT location_b AS other, type FROM links WHERE location_a = ?1"
@@ -69,8 +68,8 @@ std::vector<std::int64_t> MapStore::linkedInTier(std::int64_t location_id, Tier 
 
 // ---- Hypotheses ----
 
-void MapStore::insertHypothesis(const HypothesisRecord& h) {
-  WriteScope scope(*this);
+void SqliteMapStore::insertHypothesis(const HypothesisRecord& h) {
+  auto scope = writeScope();
   auto s = db_->cached(
       "INSERT INTO hypotheses (frame_id, best_location_id, posterior, loop_probability, "
       "accepted, rejected_reason, pose_qw, pose_qx, pose_qy, pose_qz, pose_tx, pose_ty, pose_tz, "
@@ -105,7 +104,7 @@ std::optional<ClosurePose> poseColumns(const detail::Statement& s, int first) {
 
 }  // namespace
 
-std::optional<HypothesisRecord> MapStore::hypothesis(std::int64_t frame_id) const {
+std::optional<HypothesisRecord> SqliteMapStore::hypothesis(std::int64_t frame_id) const {
   auto s = db_->cached(
       "SELECT frame_id, best_location_id, posterior, loop_probability, accepted, "
       "rejected_reason, pose_qw, pose_qx, pose_qy, pose_qz, pose_tx, pose_ty, pose_tz, "
@@ -123,7 +122,7 @@ std::optional<HypothesisRecord> MapStore::hypothesis(std::int64_t frame_id) cons
   return h;
 }
 
-std::vector<ClosurePoseRecord> MapStore::closurePoses() const {
+std::vector<ClosurePoseRecord> SqliteMapStore::closurePoses() const {
   auto s = db_->cached(
       "SELECT h.frame_id, f.location_id, h.best_location_id, h.pose_qw, h.pose_qx, h.pose_qy, "
       "h.pose_qz, h.pose_tx, h.pose_ty, h.pose_tz, h.pose_inliers "

@@ -2,14 +2,13 @@
 #include <cstring>
 
 #include "database.h"
-#include "placedb/storage/map_store.h"
+#include "placedb/storage/sqlite_map_store.h"
 #include "row_checksums.h"
-#include "write_scope.h"
 
 namespace placedb::storage {
 
-void MapStore::putPlaceCode(std::int64_t location_id, const std::vector<std::int8_t>& code) {
-  WriteScope scope(*this);
+void SqliteMapStore::putPlaceCode(std::int64_t location_id, const std::vector<std::int8_t>& code) {
+  auto scope = writeScope();
   auto s = db_->cached(
       "INSERT OR REPLACE INTO place_codes (location_id, code, checksum) VALUES (?1, ?2, ?3)");
   s->bind(1, location_id);
@@ -19,7 +18,7 @@ void MapStore::putPlaceCode(std::int64_t location_id, const std::vector<std::int
   scope.commit();
 }
 
-std::vector<PlaceCodeRecord> MapStore::placeCodes() const {
+std::vector<PlaceCodeRecord> SqliteMapStore::placeCodes() const {
   auto s = db_->cached("SELECT location_id, code, checksum FROM place_codes ORDER BY location_id");
   std::vector<PlaceCodeRecord> result;
   while (s->step()) {
@@ -34,7 +33,7 @@ std::vector<PlaceCodeRecord> MapStore::placeCodes() const {
   return result;
 }
 
-std::optional<std::vector<std::int8_t>> MapStore::placeCode(std::int64_t location_id) const {
+std::optional<std::vector<std::int8_t>> SqliteMapStore::placeCode(std::int64_t location_id) const {
   auto s = db_->cached("SELECT code, checksum FROM place_codes WHERE location_id = ?1");
   s->bind(1, location_id);
   if (!s->step()) return std::nullopt;
@@ -47,8 +46,8 @@ std::optional<std::vector<std::int8_t>> MapStore::placeCode(std::int64_t locatio
   return code;
 }
 
-void MapStore::setWmAges(const std::vector<std::pair<std::int64_t, std::int64_t>>& ages) {
-  WriteScope scope(*this);
+void SqliteMapStore::setWmAges(const std::vector<std::pair<std::int64_t, std::int64_t>>& ages) {
+  auto scope = writeScope();
   auto s = db_->cached("INSERT OR REPLACE INTO wm_entries (location_id, wm_age) VALUES (?1, ?2)");
   for (const auto& [id, age] : ages) {
     s->bind(1, id);
@@ -58,7 +57,7 @@ void MapStore::setWmAges(const std::vector<std::pair<std::int64_t, std::int64_t>
   scope.commit();
 }
 
-std::map<std::int64_t, std::int64_t> MapStore::wmAges() const {
+std::map<std::int64_t, std::int64_t> SqliteMapStore::wmAges() const {
   auto s = db_->cached(
       "SELECT l.id, coalesce(w.wm_age, l.id) FROM locations l "
       "LEFT JOIN wm_entries w ON w.location_id = l.id");

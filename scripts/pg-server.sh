@@ -1,0 +1,109 @@
+#!/usr/bin/env bash
+# Starts or stops a throwaway PostgreSQL server for placedb maps, all inside one folder.
+#
+#   scripts/pg-server.sh start DIR   # initdb into DIR/data, start it, create database "placedb",
+#                                    # print the map URI: postgresql:///placedb?host=DIR
+#   scripts/pg-server.sh stop DIR    # stop it (DIR stays; delete it to drop every map)
+#   scripts/pg-server.sh stop DIR immediate   # without a shutdown checkpoint, for a DIR about
+#                                    # to be deleted (a restart would recover it like a crash)
+#   scripts/pg-server.sh uri DIR     # print the URI again
+#
+# The server listens on a Unix socket inside DIR only (listen_addresses=''), so it never clashes
+# with another server's TCP port. Its owner, postgres, connects without a password; any other
+# role needs its password (a scratch server for trying a fleet map and for the tests, not a
+# production setup: see schema/SCHEMA.md for roles).
+# PostgreSQL refuses to run as root: run as root, the script runs the server as the `postgres`
+# user of Debian's postgresql package (runuser) and gives it DIR. Without DIR, `start` makes one
+# with mktemp under /tmp. Needs Debian's postgresql package (scripts/install-deps.sh).
+set -euo pipefail
+
+usage() {
+  echo "usage: $0 start [DIR] | stop DIR | uri DIR" >&2
+  exit 2
+}
+
+# Debian keeps the server's programs in /usr/lib/postgresql/VERSION/bin, off PATH; PG_BIN
+# overrides.
+find_bin() {
+  local dir
+  for dir in ${PG_BIN:-} $(ls -d /usr/lib/postgresql/*/bin 2>/dev/null | sort -V -r); do
+    if [[ -x "$dir/pg_ctl" && -x "$dir/initdb" && -x "$dir/createdb" ]]; then
+      echo "$dir"
+      return
+    fi
+  done
+  echo "pg-server: PostgreSQL's server binaries (initdb, pg_ctl) are not installed;" \
+    "install Debian's postgresql package (scripts/install-deps.sh)" >&2
+  exit 3
+}
+
+# Runs a command as the user that owns the server: postgres when we are root.
+as_owner() {
+  if [[ $(id -u) -eq 0 ]]; then
+    runuser -u postgres -- "$@"
+  else
+    "$@"
+  fi
+}
+
+[[ $# -ge 1 ]] || usage
+command=$1
+dir=${2:-}
+
+case "$command" in
+  start)
+    bin=$(find_bin)
+    if [[ -z "$dir" ]]; then dir=$(mktemp -d /tmp/placedb-pg.XXXXXX); fi
+    mkdir -p "$dir"
+    dir=$(cd "$dir" && pwd)
+    if [[ $(id -u) -eq 0 ]]; then
+      if ! id postgres >/dev/null 2>&1; then
+        echo "pg-server: running as root needs the postgres user (Debian's postgresql package)" >&2
+        exit 3
+      fi
+      chown postgres: "$dir"
+      chmod 0755 "$dir"
+      # The server's user must reach DIR through every folder above it.
+      parent=$(dirname "$dir")
+      while [[ "$parent" != "/" ]]; do
+        chmod o+x "$parent" 2>/dev/null || true
+        parent=$(dirname "$parent")
+      done
+    fi
+    if [[ ! -f "$dir/data/PG_VERSION" ]]; then
+      as_owner "$bin/initdb" -D "$dir/data" -A trust -E UTF8 --locale=C.UTF-8 >"$dir/initdb.log" 2>&1 ||
+        {
+          echo "pg-server: initdb failed; see $dir/initdb.log" >&2
+          exit 1
+        }
+      # The socket only: the server's owner without a password, every other role (a robot's,
+      # made with CREATE ROLE ... PASSWORD) with its password.
+      printf '%s\n' "local all postgres trust" "local all all scram-sha-256" \
+        | as_owner tee "$dir/data/pg_hba.conf" >/dev/null
+    fi
+    as_owner "$bin/pg_ctl" -D "$dir/data" -l "$dir/server.log" -w -t 60 \
+      -o "-c listen_addresses='' -c unix_socket_directories='$dir'" start \
+      >/dev/null || {
+      echo "pg-server: the server did not start; see $dir/server.log" >&2
+      exit 1
+    }
+    # createdb fails when the database exists (a restart): that is fine.
+    as_owner "$bin/createdb" -h "$dir" placedb 2>/dev/null || true
+    # Any local user may connect as postgres (trust on the socket, which only this machine sees).
+    echo "postgresql:///placedb?host=$dir&user=postgres"
+    ;;
+  stop)
+    [[ -n "$dir" ]] || usage
+    bin=$(find_bin)
+    if [[ -f "$dir/data/postmaster.pid" ]]; then
+      as_owner "$bin/pg_ctl" -D "$dir/data" -m "${3:-fast}" -w stop >/dev/null
+    fi
+    ;;
+  uri)
+    [[ -n "$dir" ]] || usage
+    echo "postgresql:///placedb?host=$(cd "$dir" && pwd)&user=postgres"
+    ;;
+  *)
+    usage
+    ;;
+esac

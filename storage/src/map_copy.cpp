@@ -1,0 +1,99 @@
+// copyMap: every table of one map into another, whatever their backends.
+#include "placedb/storage/map_copy.h"
+
+#include "placedb/storage/map_store.h"
+
+namespace placedb::storage {
+
+const std::vector<TableColumns>& mapTables() {
+  // Parents before children for the keys checked at once (word_refs -> words, links and
+  // hypotheses -> locations); frames, locations and words refer to each other through
+  // deferred keys, checked at commit.
+  static const std::vector<TableColumns> kTables = {
+      {"sessions",
+       {"id", "started_at", "ended_at", "clean_close", "software_version", "source",
+        "source_digest"}},
+      {"settings", {"session_id", "key", "value"}, 2},
+      {"vocabulary_imports",
+       {"id", "session_id", "file", "checksum", "word_count", "mode", "imported_at", "extractor",
+        "distance_unit", "settings"}},
+      {"frames",
+       {"id",
+        "session_id",
+        "source_index",
+        "source_path",
+        "outcome",
+        "location_id",
+        "features_ms",
+        "quantisation_ms",
+        "likelihood_ms",
+        "filter_ms",
+        "memory_ms",
+        "storage_ms",
+        "total_ms",
+        "feature_count",
+        "words_created",
+        "vocabulary_size",
+        "wm_size",
+        "stm_size",
+        "mean_quantisation_error",
+        "stamp_ns"}},
+      {"locations", {"id", "session_id", "weight", "tier", "created_frame"}},
+      {"location_frames", {"location_id", "frame_id"}, 2},
+      {"words",
+       {"id", "created_frame", "vocabulary_import_id", "descriptor_type", "dim", "descriptor",
+        "source_frame", "checksum"}},
+      {"word_refs",
+       {"location_id", "ordinal", "word_id", "x", "y", "size", "angle", "response"},
+       2},
+      {"links", {"location_a", "location_b", "type", "score"}, 3},
+      {"hypotheses",
+       {"frame_id", "best_location_id", "posterior", "loop_probability", "accepted",
+        "rejected_reason", "pose_qw", "pose_qx", "pose_qy", "pose_qz", "pose_tx", "pose_ty",
+        "pose_tz", "pose_inliers"}},
+      {"engine_state", {"key", "value", "checksum"}},
+      {"filter_posterior", {"location_id", "probability"}},
+      {"kd_nodes",
+       {"tree", "node", "left_child", "right_child", "split_dim", "split_value", "checksum"},
+       2},
+      {"place_codes", {"location_id", "code", "checksum"}},
+      {"wm_entries", {"location_id", "wm_age"}},
+  };
+  return kTables;
+}
+
+void copyMap(const MapStore& from, MapStore& to,
+             const std::function<void(const CopyProgress&)>& progress) {
+  if (to.readOnly())
+    throw StorageError(ErrorCode::kReadOnly, "map " + to.path() + " is open read-only");
+  if (!to.sessions().empty() || to.frameCount() > 0 || to.wordCount() > 0)
+    throw StorageError(ErrorCode::kInvalidArgument,
+                       "map " + to.path() + " is not empty: a copy is refused over another map");
+  // Snapshot of the source, one transaction in the destination: a copy is whole or absent.
+  const ReadSnapshot snapshot = from.readSnapshot();
+  Transaction tx = to.begin();
+  for (const TableColumns& t : mapTables()) {
+    // A new map holds its own resume state rows (the kd_nodes row count): the source's replace
+    // them.
+    if (t.table == "engine_state")
+      for (const char* key : {"storage.kd_nodes.rows"}) to.deleteState(key);
+    constexpr std::size_t kBatch = 2000;
+    std::vector<TableRow> batch;
+    std::int64_t rows = 0;
+    from.readTable(t, [&](const TableRow& row) {
+      batch.push_back(row);
+      if (batch.size() == kBatch) {
+        to.writeRows(t, batch);
+        rows += static_cast<std::int64_t>(batch.size());
+        batch.clear();
+        if (progress) progress({t.table, rows});
+      }
+    });
+    if (!batch.empty()) to.writeRows(t, batch);
+    rows += static_cast<std::int64_t>(batch.size());
+    if (progress) progress({t.table, rows});
+  }
+  tx.commit();
+}
+
+}  // namespace placedb::storage

@@ -1,0 +1,196 @@
+// What the PostgreSQL backend adds to MapStore's rules: the writer's advisory lock, read-only
+// opens, refusing a database that is not a placedb map, the shared schema version and views,
+// errors that name the map without its password, and checks of damaged rows. The record
+// round trips themselves are records_test.cpp's, run on both backends.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "pg_test_server.h"
+#include "placedb/storage/map_check.h"
+#include "placedb/storage/map_store.h"
+#include "placedb/storage/migrations.h"
+#include "storage_test_util.h"
+
+namespace placedb::storage {
+namespace {
+
+using placedb::testing::freshPgDatabase;
+using placedb::testing::pgAdmin;
+using placedb::testing::pgTestDatabaseName;
+
+ErrorCode codeOf(const std::function<void()>& action, std::string* message = nullptr) {
+  try {
+    action();
+  } catch (const Error& e) {
+    if (message) *message = e.what();
+    return e.code();
+  }
+  ADD_FAILURE() << "no error";
+  return ErrorCode::kInternal;
+}
+
+TEST(MapDisplayName, DropsThePasswordAndNothingElse) {
+  EXPECT_EQ(mapDisplayName("run.placedb"), "run.placedb");
+  EXPECT_EQ(mapDisplayName("postgresql://robot:s3cret@db.example:5432/fleet?sslmode=require"),
+            "postgresql://robot@db.example:5432/fleet?sslmode=require");
+  EXPECT_EQ(mapDisplayName("postgres://robot@h/fleet"), "postgres://robot@h/fleet");
+  EXPECT_EQ(mapDisplayName("postgresql:///fleet?host=/tmp/pg&password=s3cret&user=robot"),
+            "postgresql:///fleet?host=/tmp/pg&user=robot");
+  EXPECT_EQ(mapDisplayName("postgresql://:s3cret@h/fleet?password=other"), "postgresql://@h/fleet");
+  EXPECT_TRUE(isServerMap("postgres://h/db"));
+  EXPECT_FALSE(isServerMap("postgresql.placedb"));
+  EXPECT_EQ(mapPassword("postgresql://robot:s%40cret@h/db"), "s@cret");
+  EXPECT_EQ(mapPassword("postgresql:///db?host=/x&password=p%26q&user=r"), "p&q");
+  EXPECT_EQ(mapPassword("postgresql://robot@h/db"), "");
+}
+
+// libpq quotes a URI it cannot parse; neither the URI nor its password may reach the message.
+TEST(MapDisplayName, AMalformedUriIsAnInvalidArgumentWithoutItsPassword) {
+  std::string message;
+  EXPECT_EQ(codeOf([&] { openMapStore("postgresql://robot:s3cret@[::1/db", OpenMode::kReadOnly); },
+                   &message),
+            ErrorCode::kInvalidArgument);
+  EXPECT_EQ(message.find("s3cret"), std::string::npos) << message;
+  EXPECT_NE(message.find("postgresql://robot@[::1/db"), std::string::npos) << message;
+}
+
+TEST(PgMapStore, SecondWriterIsRefusedAsMapBusyReadersAreNot) {
+  PLACEDB_REQUIRE_PG_SERVER(server);
+  const std::string uri = freshPgDatabase(server, pgTestDatabaseName());
+  {
+    auto writer = openMapStore(uri, OpenMode::kReadWrite);
+    const auto session = writer->beginSession("src", {}, "test");
+    testing::writeFrame(*writer, session, 0);
+    std::string message;
+    EXPECT_EQ(codeOf([&] { openMapStore(uri, OpenMode::kReadWrite); }, &message),
+              ErrorCode::kMapBusy);
+    EXPECT_NE(message.find("busy"), std::string::npos) << message;
+    EXPECT_NE(message.find(uri), std::string::npos) << message;
+    auto reader = openMapStore(uri, OpenMode::kReadOnly);
+    EXPECT_EQ(reader->frameCount(), 1);
+    EXPECT_EQ(codeOf([&] { reader->putState("k", std::string("v")); }), ErrorCode::kReadOnly);
+  }
+  // The lock went with the writer's connection.
+  auto next = openMapStore(uri, OpenMode::kReadWrite);
+  EXPECT_EQ(next->frameCount(), 1);
+}
+
+TEST(PgMapStore, SchemaVersionAndViewsMatchSqlite) {
+  PLACEDB_REQUIRE_PG_SERVER(server);
+  const std::string uri = freshPgDatabase(server, pgTestDatabaseName());
+  auto store = openMapStore(uri, OpenMode::kReadWrite);
+  EXPECT_EQ(store->schemaVersion(), currentSchemaVersion());
+  EXPECT_EQ(pgMigrations().back().version, currentSchemaVersion())
+      << "a migration was added for SQLite only: add it to migrations/pg/ with the same number";
+  const auto session = store->beginSession("src", {{"t_loop", "0.1"}}, "test");
+  for (int i = 0; i < 3; ++i) testing::writeFrame(*store, session, i);
+  store->insertLink(1, 3, LinkType::kLoopClosure, 0.9);
+  // Every view of the SQLite schema answers on the server.
+  for (const char* view : {"v_frames", "v_locations", "v_location_frames", "v_location_words",
+                           "v_links", "v_loop_closures", "v_hypotheses", "v_loop_closure_poses",
+                           "v_vocabulary_growth", "v_kd_trees"})
+    pgAdmin(uri, std::string("SELECT * FROM ") + view);
+  PGconn* conn = PQconnectdb(uri.c_str());
+  PGresult* r = PQexec(conn,
+                       "SELECT location_a, location_b, first_frame_a, first_frame_b, session_a "
+                       "FROM v_loop_closures");
+  ASSERT_EQ(PQntuples(r), 1);
+  EXPECT_STREQ(PQgetvalue(r, 0, 2), "0");
+  EXPECT_STREQ(PQgetvalue(r, 0, 3), "2");
+  PQclear(r);
+  PQfinish(conn);
+}
+
+TEST(PgMapStore, ReadOnlyOpenOfAnEmptyDatabaseFindsNoMapAndWritesNothing) {
+  PLACEDB_REQUIRE_PG_SERVER(server);
+  const std::string uri = freshPgDatabase(server, pgTestDatabaseName());
+  std::string message;
+  EXPECT_EQ(codeOf([&] { openMapStore(uri, OpenMode::kReadOnly); }, &message), ErrorCode::kIo);
+  EXPECT_NE(message.find("not found"), std::string::npos) << message;
+  // Still empty: a read-write open would have created placedb_meta.
+  auto store = openMapStore(uri, OpenMode::kReadWrite);
+  EXPECT_EQ(store->frameCount(), 0);
+}
+
+TEST(PgMapStore, DatabaseOfAnotherProgramIsRefusedUntouched) {
+  PLACEDB_REQUIRE_PG_SERVER(server);
+  const std::string uri = freshPgDatabase(server, pgTestDatabaseName());
+  pgAdmin(uri, "CREATE TABLE invoices (id bigint PRIMARY KEY)");
+  std::string message;
+  EXPECT_EQ(codeOf([&] { openMapStore(uri, OpenMode::kReadWrite); }, &message),
+            ErrorCode::kMapRefused);
+  EXPECT_NE(message.find("not a placedb map"), std::string::npos) << message;
+  PGconn* conn = PQconnectdb(uri.c_str());
+  PGresult* r = PQexec(conn, "SELECT count(*) FROM pg_tables WHERE schemaname = 'public'");
+  EXPECT_STREQ(PQgetvalue(r, 0, 0), "1");
+  PQclear(r);
+  PQfinish(conn);
+}
+
+TEST(PgMapStore, NewerSchemaIsRefused) {
+  PLACEDB_REQUIRE_PG_SERVER(server);
+  const std::string uri = freshPgDatabase(server, pgTestDatabaseName());
+  { openMapStore(uri, OpenMode::kReadWrite); }
+  pgAdmin(uri, "UPDATE placedb_meta SET value = '99' WHERE key = 'schema_version'");
+  for (OpenMode mode : {OpenMode::kReadWrite, OpenMode::kReadOnly}) {
+    std::string message;
+    EXPECT_EQ(codeOf([&] { openMapStore(uri, mode); }, &message), ErrorCode::kMapRefused);
+    EXPECT_NE(message.find("99"), std::string::npos) << message;
+  }
+}
+
+TEST(PgMapStore, WrongPasswordAndUnreachableServerHaveTheirOwnCodesAndHideThePassword) {
+  PLACEDB_REQUIRE_PG_SERVER(server);
+  const std::string uri = freshPgDatabase(server, pgTestDatabaseName());
+  pgAdmin(server, "DROP ROLE IF EXISTS storage_robot");
+  pgAdmin(server, "CREATE ROLE storage_robot LOGIN PASSWORD 'right-horse'");
+  const std::string host = uri.substr(uri.find("host="), uri.find('&') - uri.find("host="));
+  const std::string db = pgTestDatabaseName();
+  std::string message;
+  const std::string wrong = "postgresql://storage_robot:wrong-horse@/" + db + "?" + host;
+  EXPECT_EQ(codeOf([&] { openMapStore(wrong, OpenMode::kReadOnly); }, &message),
+            ErrorCode::kAuthRefused);
+  EXPECT_EQ(message.find("wrong-horse"), std::string::npos) << message;
+  EXPECT_NE(message.find("postgresql://storage_robot@/" + db), std::string::npos) << message;
+  const std::string in_query =
+      "postgresql:///" + db + "?" + host + "&user=storage_robot&password=wrong-horse";
+  EXPECT_EQ(codeOf([&] { openMapStore(in_query, OpenMode::kReadWrite); }, &message),
+            ErrorCode::kAuthRefused);
+  EXPECT_EQ(message.find("wrong-horse"), std::string::npos) << message;
+  const std::string nowhere = "postgresql://robot:right-horse@/" + db + "?host=/nonexistent-dir";
+  EXPECT_EQ(codeOf([&] { openMapStore(nowhere, OpenMode::kReadOnly); }, &message),
+            ErrorCode::kServerUnreachable);
+  EXPECT_EQ(message.find("right-horse"), std::string::npos) << message;
+}
+
+TEST(PgMapStore, DamagedRowsAreRefusedOnReadAndListedByCheck) {
+  PLACEDB_REQUIRE_PG_SERVER(server);
+  const std::string uri = freshPgDatabase(server, pgTestDatabaseName());
+  {
+    auto store = openMapStore(uri, OpenMode::kReadWrite);
+    const auto session = store->beginSession("src", {}, "test");
+    for (int i = 0; i < 3; ++i) testing::writeFrame(*store, session, i);
+    store->writeKdNodes({{0, 0, 1, 2, 3, 0.5}}, {}, true);
+    EXPECT_EQ(store->loadKdNodes().size(), 1u);
+  }
+  EXPECT_TRUE(checkMap(uri).ok());
+  // A flipped byte inside a descriptor: the server's own checks cannot see it.
+  pgAdmin(uri,
+          "UPDATE words SET descriptor = set_byte(descriptor, 0, get_byte(descriptor, 0) # 1) "
+          "WHERE id = 5");
+  pgAdmin(uri, "DELETE FROM kd_nodes");
+  auto store = openMapStore(uri, OpenMode::kReadOnly);
+  std::string message;
+  EXPECT_EQ(codeOf([&] { store->loadWords({5}); }, &message), ErrorCode::kMapRefused);
+  EXPECT_NE(message.find("words row 5"), std::string::npos) << message;
+  EXPECT_EQ(codeOf([&] { store->loadKdNodes(); }), ErrorCode::kMapRefused);
+  const CheckReport report = checkMap(uri);
+  ASSERT_EQ(report.findings_total, 2);
+  EXPECT_EQ(report.findings[0].table, "words");
+  EXPECT_EQ(report.findings[0].row, "5");
+  EXPECT_EQ(report.findings[1].table, "kd_nodes");
+}
+
+}  // namespace
+}  // namespace placedb::storage
