@@ -5,7 +5,7 @@ same sequence with each back to back (`placedb map NEW.placedb LIST --log LOG`, 
 On a shared machine only the ratio of runs made side by side means anything.
 
 Usage: bench/quality/speed_ratio.py [--base COMMIT] [--base-dir DIR] [--build DIR]
-                                    [--list FRAMES] [--rounds N] [--out DIR]
+                                    [--list FRAMES] [--rounds N] [--out DIR] [--set K=V]...
 The base commit is checked out with `git worktree add --detach` into --base-dir (kept for the
 next call) and built there; this tree's CLI is taken from --build as it stands.
 """
@@ -34,13 +34,15 @@ def percentile(values, p):
     return v[min(len(v) - 1, round(p / 100 * (len(v) - 1)))] if v else 0.0
 
 
-def run(cli, frames, out_dir, name):
+def run(cli, frames, out_dir, name, settings=()):
     base = os.path.join(out_dir, name)
     for suffix in ('.placedb', '.placedb-wal', '.placedb-shm', '.csv'):
         if os.path.exists(base + suffix):
             os.remove(base + suffix)
-    subprocess.run([cli, 'map', base + '.placedb', frames, '--log', base + '.csv'], check=True,
-                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    cmd = [cli, 'map', base + '.placedb', frames, '--log', base + '.csv']
+    for s in settings:
+        cmd += ['--set', s]
+    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     with open(base + '.csv', newline='') as f:
         rows = list(csv.DictReader(f))
     figures = {'time_ms': [float(r['time_ms']) for r in rows]}
@@ -59,6 +61,8 @@ def main():
                                                   'lip6_outdoor', 'frames.txt'))
     p.add_argument('--rounds', type=int, default=1)
     p.add_argument('--out', default='/tmp/placedb-speed')
+    p.add_argument('--set', action='append', default=[],
+                   help='KEY=VALUE for this tree only (settings the base may not know)')
     a = p.parse_args()
     if not os.path.isdir(a.base_dir):
         subprocess.run(['git', '-C', ROOT, 'worktree', 'add', '--detach', a.base_dir, a.base],
@@ -73,14 +77,15 @@ def main():
     runs = {'base': [], 'this': []}
     for r in range(a.rounds):
         for name in ('base', 'this'):
-            runs[name].append(run(clis[name], a.list, a.out, f'{name}_{r}'))
+            settings = a.set if name == 'this' else ()
+            runs[name].append(run(clis[name], a.list, a.out, f'{name}_{r}', settings))
             t = runs[name][-1]['time_ms']
             print(f'round {r} {name}: mean {sum(t) / len(t):.1f} ms, p99 '
                   f'{percentile(t, 99):.1f}, max {max(t):.1f}', flush=True)
     print('| build | frame mean | ' + ' | '.join(s.replace('_ms', '') for s in STAGES) +
           ' | filter p99 | verification p99 |')
     print('|---' * (len(STAGES) + 4) + '|')
-    means = {}
+    means, p99s = {}, {}
     for name in ('base', 'this'):
         merged = {}
         for figures in runs[name]:
@@ -91,8 +96,10 @@ def main():
         p99 = [f'{percentile(merged[s], 99):.1f}' if s in merged else '-'
                for s in ('filter_ms', 'verification_ms')]
         label = a.base if name == 'base' else 'this tree'
+        p99s[name] = percentile(merged['time_ms'], 99)
         print(f"| {label} | {means[name]:.1f} | {' | '.join(cells)} | {' | '.join(p99)} |")
     print(f"ratio of frame means (this / base): {means['this'] / means['base']:.3f}")
+    print(f"ratio of frame p99 (this / base): {p99s['this'] / p99s['base']:.3f}")
     return 0
 
 
