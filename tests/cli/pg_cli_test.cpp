@@ -3,6 +3,7 @@
 // placedb copy between backends.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
@@ -172,6 +173,74 @@ TEST_F(PgCli, CredentialsNeverShowAndRefusalsHaveTheirCodes) {
                        "s.source || s.software_version || t.value LIKE '%sesame%'");
   EXPECT_STREQ(PQgetvalue(r, 0, 0), "0");
   PQclear(r);
+  PQfinish(conn);
+}
+
+// SCHEMA.md's least-privilege robot: with exactly its grants, a robot whose password comes from
+// a password file (libpq's PGPASSFILE; the URI holds none) and whose URI asks sslmode=disable
+// maps a session of its own and queries; it cannot delete what others stored nor alter tables.
+TEST_F(PgCli, LeastPrivilegeRobotMapsAndQueriesWithAPasswordFile) {
+  const std::string list = lip6List(dir_, "lip6_8.txt", 0, 8);
+  if (list.empty()) GTEST_SKIP() << "lip6_outdoor absent under " << datasetsDir();
+  const std::string uri = database("");
+  const std::string owner_list = lip6List(dir_, "lip6_4.txt", 0, 4);
+  ASSERT_EQ(placedb({"map", uri, owner_list, "-q"}, dir_).exit_code, 0);  // the owner's session
+
+  const std::string db = pgTestDatabaseName();
+  pgAdmin(server_, "DROP ROLE IF EXISTS cli_fleet_robot");
+  pgAdmin(server_, "CREATE ROLE cli_fleet_robot LOGIN PASSWORD 'pass-file-secret'");
+  // The grants as SCHEMA.md gives them.
+  pgAdmin(server_, "GRANT CONNECT ON DATABASE " + db + " TO cli_fleet_robot");
+  pgAdmin(uri, "GRANT USAGE ON SCHEMA public TO cli_fleet_robot");
+  pgAdmin(uri, "GRANT SELECT, INSERT, UPDATE ON ALL TABLES IN SCHEMA public TO cli_fleet_robot");
+  pgAdmin(uri,
+          "GRANT DELETE ON engine_state, filter_posterior, kd_nodes, locations, word_refs "
+          "TO cli_fleet_robot");
+
+  const std::string host = uri.substr(uri.find("host="), uri.find('&') - uri.find("host="));
+  const fs::path pass_file = dir_ / "pgpass";
+  {
+    std::ofstream out(pass_file);
+    out << "*:*:" << db << ":cli_fleet_robot:pass-file-secret\n";
+  }
+  fs::permissions(pass_file, fs::perms::owner_read | fs::perms::owner_write);
+  ::setenv("PGPASSFILE", pass_file.c_str(), 1);
+  ::setenv("PGSSLMODE", "prefer", 1);
+  const std::string robot = "postgresql://cli_fleet_robot@/" + db + "?" + host + "&sslmode=disable";
+
+  auto mapped = placedb({"map", robot, list, "--new-session", "-q"}, dir_);
+  EXPECT_EQ(mapped.exit_code, 0) << describe(mapped);
+  auto query = placedb({"query", robot,
+                        dataset("lip6_outdoor").string() + "/images/"
+                                                           "outdoor_kennedylong_000006.png"},
+                       dir_);
+  EXPECT_EQ(query.exit_code, 0) << describe(query);
+  auto info = placedb({"info", robot}, dir_);
+  EXPECT_EQ(info.exit_code, 0) << describe(info);
+  EXPECT_NE(info.out.find("session 2: 8 frames"), std::string::npos) << info.out;
+  for (const auto& text : {mapped.err, query.out, query.err, info.out})
+    EXPECT_EQ(text.find("pass-file-secret"), std::string::npos) << text;
+
+  // Without the file, the same URI is refused as credentials (exit 12), in one line.
+  ::setenv("PGPASSFILE", (dir_ / "no-such-pgpass").c_str(), 1);
+  auto refused = placedb({"info", robot}, dir_);
+  expectCleanError(refused, 12, "refused the credentials");
+  ::unsetenv("PGPASSFILE");
+  ::unsetenv("PGSSLMODE");
+
+  // The robot's own connection: others' frames and sessions cannot be deleted, nor the schema
+  // changed.
+  const std::string robot_with_password =
+      "postgresql://cli_fleet_robot:pass-file-secret@/" + db + "?" + host;
+  PGconn* conn = PQconnectdb(robot_with_password.c_str());
+  ASSERT_EQ(PQstatus(conn), CONNECTION_OK) << PQerrorMessage(conn);
+  for (const char* sql : {"DELETE FROM frames", "DELETE FROM sessions WHERE id = 1",
+                          "ALTER TABLE frames ADD COLUMN x INTEGER", "DROP TABLE links"}) {
+    PGresult* r = PQexec(conn, sql);
+    EXPECT_EQ(PQresultStatus(r), PGRES_FATAL_ERROR) << sql;
+    EXPECT_STREQ(PQresultErrorField(r, PG_DIAG_SQLSTATE), "42501") << sql;  // no privilege
+    PQclear(r);
+  }
   PQfinish(conn);
 }
 
