@@ -5,6 +5,18 @@
 
 namespace placedb::storage {
 
+std::string TableColumns::columnList() const {
+  std::string out;
+  for (const auto& c : columns) out += (out.empty() ? "" : ", ") + c;
+  return out;
+}
+
+std::string TableColumns::selectInKeyOrder() const {
+  std::string order;
+  for (int i = 0; i < key_columns; ++i) order += (i ? ", " : "") + columns[i];
+  return "SELECT " + columnList() + " FROM " + table + " ORDER BY " + order;
+}
+
 const std::vector<TableColumns>& mapTables() {
   // Parents before children for the keys checked at once (word_refs -> words, links and
   // hypotheses -> locations); frames, locations and words refer to each other through

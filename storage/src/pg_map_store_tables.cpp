@@ -2,23 +2,12 @@
 #include "pg_map_store.h"
 
 namespace placedb::storage {
-namespace {
-
-std::string columnList(const TableColumns& t) {
-  std::string out;
-  for (const auto& c : t.columns) out += (out.empty() ? "" : ", ") + c;
-  return out;
-}
-
-}  // namespace
 
 void PgMapStore::readTable(const TableColumns& t,
                            const std::function<void(const TableRow&)>& row) const {
-  std::string order;
-  for (int i = 0; i < t.key_columns; ++i) order += (i ? ", " : "") + t.columns[i];
   // One result in memory: the largest table of a map (word_refs) is a few hundred MB at most
   // for a day's mapping; a cursor would be the next step for larger ones.
-  const std::string sql = "SELECT " + columnList(t) + " FROM " + t.table + " ORDER BY " + order;
+  const std::string sql = t.selectInKeyOrder();
   const auto r = db_->run(sql.c_str());
   TableRow values(t.columns.size());
   for (int i = 0; i < r.rows(); ++i) {
@@ -45,7 +34,7 @@ void PgMapStore::writeRows(const TableColumns& t, const std::vector<TableRow>& r
       throw StorageError(ErrorCode::kMapRefused,
                          "map " + label_ + " lacks column " + t.table + "." + t.columns[c]);
   // One multi-row INSERT per batch: a round trip per batch, not per row.
-  std::string sql = "INSERT INTO " + t.table + " (" + columnList(t) + ") VALUES ";
+  std::string sql = "INSERT INTO " + t.table + " (" + t.columnList() + ") VALUES ";
   detail::PgParams params;
   int n = 0;
   for (std::size_t r = 0; r < rows.size(); ++r) {

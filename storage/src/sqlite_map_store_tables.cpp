@@ -3,22 +3,10 @@
 #include "placedb/storage/sqlite_map_store.h"
 
 namespace placedb::storage {
-namespace {
-
-std::string columnList(const TableColumns& t) {
-  std::string out;
-  for (const auto& c : t.columns) out += (out.empty() ? "" : ", ") + c;
-  return out;
-}
-
-}  // namespace
 
 void SqliteMapStore::readTable(const TableColumns& t,
                                const std::function<void(const TableRow&)>& row) const {
-  std::string order;
-  for (int i = 0; i < t.key_columns; ++i) order += (i ? ", " : "") + t.columns[i];
-  detail::Statement s(db_->handle(),
-                      "SELECT " + columnList(t) + " FROM " + t.table + " ORDER BY " + order);
+  detail::Statement s(db_->handle(), t.selectInKeyOrder());
   TableRow values(t.columns.size());
   while (s.step()) {
     for (std::size_t i = 0; i < t.columns.size(); ++i) {
@@ -52,8 +40,8 @@ void SqliteMapStore::writeRows(const TableColumns& t, const std::vector<TableRow
   auto scope = writeScope();
   std::string marks;
   for (std::size_t i = 0; i < t.columns.size(); ++i) marks += (i ? ", ?" : "?");
-  detail::Statement s(db_->handle(),
-                      "INSERT INTO " + t.table + " (" + columnList(t) + ") VALUES (" + marks + ")");
+  detail::Statement s(
+      db_->handle(), "INSERT INTO " + t.table + " (" + t.columnList() + ") VALUES (" + marks + ")");
   for (const TableRow& row : rows) {
     for (std::size_t i = 0; i < row.size(); ++i) {
       const int index = static_cast<int>(i) + 1;

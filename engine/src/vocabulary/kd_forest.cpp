@@ -26,23 +26,8 @@ std::uint64_t splitMix64(std::uint64_t x) {
 }  // namespace
 
 float squaredDistance(const float* a, const float* b, int dim) {
-  // Four partial sums let the compiler vectorise; the summation order is fixed, so results are
-  // identical on every run of the same binary.
-  float s0 = 0, s1 = 0, s2 = 0, s3 = 0;
-  int i = 0;
-  for (; i + 4 <= dim; i += 4) {
-    const float d0 = a[i] - b[i], d1 = a[i + 1] - b[i + 1];
-    const float d2 = a[i + 2] - b[i + 2], d3 = a[i + 3] - b[i + 3];
-    s0 += d0 * d0;
-    s1 += d1 * d1;
-    s2 += d2 * d2;
-    s3 += d3 * d3;
-  }
-  for (; i < dim; ++i) {
-    const float d = a[i] - b[i];
-    s0 += d * d;
-  }
-  return (s0 + s1) + (s2 + s3);
+  // No bound stops it early: the same sums, in the same order, as every bounded comparison.
+  return squaredDistanceBelow(a, b, dim, std::numeric_limits<float>::infinity());
 }
 
 void offerNeighbor(std::vector<Neighbor>* best, std::size_t k, Neighbor candidate) {
@@ -301,7 +286,8 @@ class VisitedSlots {
 }  // namespace
 
 float squaredDistanceBelow(const float* a, const float* b, int dim, float bound) {
-  // The sum of squares in squaredDistance's order, checked every 16 dimensions: every partial
+  // Four partial sums let the compiler vectorise; their order is fixed, so results are identical
+  // on every run of the same binary. The total is checked every 16 dimensions: every partial
   // sum is non-negative and float addition is monotone, so once the partial total exceeds the
   // bound the full one does too, and stopping changes no comparison against the bound.
   float s0 = 0, s1 = 0, s2 = 0, s3 = 0;

@@ -25,6 +25,9 @@ struct TableColumns {
   std::string table;
   std::vector<std::string> columns;  // the first ones are the primary key, rows come in its order
   int key_columns = 1;
+
+  std::string columnList() const;        // "a, b, c", for a SELECT or an INSERT
+  std::string selectInKeyOrder() const;  // every row, in primary-key order
 };
 
 // Every table of the current schema with its columns, in an order in which inserting them
