@@ -179,6 +179,13 @@ TEST(Options, StoredSettingsWithoutALaterSettingKeepWhatTheSessionRan) {
   EXPECT_EQ(Options::fromSettings(stored).feature_target, Options().feature_target);
   stored["feature_target"] = "100";
   EXPECT_EQ(Options::fromStoredSettings(stored).feature_target, 100);
+  // ... and one stored before feature_retry and geometry_max_error_diagonal searched again at
+  // half the target and kept 3 px on any image.
+  stored.erase("feature_retry");
+  stored.erase("geometry_max_error_diagonal");
+  EXPECT_EQ(Options::fromStoredSettings(stored).feature_retry, 0.5);
+  EXPECT_EQ(Options::fromStoredSettings(stored).geometry_max_error_diagonal, 0.0);
+  EXPECT_EQ(Options::fromSettings(stored).feature_retry, 1.0);
 }
 
 }  // namespace

@@ -138,15 +138,10 @@ TEST_F(TemporalTest, WeakHypothesesNextToThePreviousClosureAreAcceptedAndRight) 
     EXPECT_TRUE(rightPlace(i, with[i])) << "hypothesis frames " << with[i].source_indices.front();
   }
 
-  std::size_t accepted_on = 0, accepted_off = 0;
-  for (std::size_t i = 0; i < with.size(); ++i) {
-    accepted_on += with[i].accepted;
-    accepted_off += without[i].accepted;
-    if (with[i].accepted) {
-      EXPECT_TRUE(rightPlace(i, with[i])) << "frame " << i;
-    }
-  }
-  EXPECT_GT(accepted_on, accepted_off);
+  // What it adds in all is measured where revisits have few features (ClosureRunGaps): on the
+  // corridor, a weak continuation often stands in for a jump that passes on its own.
+  for (std::size_t i = 0; i < with.size(); ++i)
+    if (with[i].accepted) EXPECT_TRUE(rightPlace(i, with[i])) << "frame " << i;
 }
 
 TEST_F(TemporalTest, ResumingJustBeforeAWeakClosureGivesTheSameResult) {
@@ -186,6 +181,16 @@ TEST(ClosureRunGaps, BridgedFramesAreRightAndResumeExactly) {
     }
   ASSERT_FALSE(bridged.empty()) << "frames 535 and 575-577 follow a frame without a closure";
   for (std::size_t i : bridged) EXPECT_TRUE(rightPlace(truth, i, straight[i])) << "frame " << i;
+  Options off = options;
+  off.temporal_min_inliers = 0;
+  off.temporal_max_nfa = 0;
+  const auto alone = mapFrames(seq, "lip6_outdoor_160x128", "ClosureRunGaps_off", off, {});
+  const auto count = [](const std::vector<Frame>& frames) {
+    std::size_t n = 0;
+    for (const Frame& f : frames) n += f.accepted;
+    return n;
+  };
+  EXPECT_GT(count(straight), count(alone)) << "temporal consistency adds closures";
 
   const auto resumed =
       mapFrames(seq, "lip6_outdoor_160x128", "ClosureRunGaps_resumed", options, stops);
@@ -197,15 +202,19 @@ TEST(ClosureRunGaps, BridgedFramesAreRightAndResumeExactly) {
   }
 }
 
-// lip6_outdoor_120x96's first revisit has a frame (639) that no single frame's check accepts, whose
-// run of frames matching consecutive places passes together (closure_evidence.h): they are the
-// right places, and a map reopened in the middle of each run decides exactly as a straight one.
+// lip6_outdoor_120x96's first revisits, at the images' own ~44 features, have frames (501, 568,
+// 599, ...) that no single frame's check accepts, whose runs of frames matching consecutive places
+// pass together (closure_evidence.h): they are the right places, and a map reopened in the middle
+// of each run decides exactly as a straight one.
 TEST(ClosureEvidenceRuns, RunsPassWhereNoFrameCouldAndResumeExactly) {
   const auto dir = dataset("lip6_outdoor_120x96");
   if (dir.empty()) GTEST_SKIP() << "no lip6_outdoor_120x96 under " << datasetsDir();
   const Sequence seq = loadSequence(dir, 660);
   const Truth truth = loadTruth(dir);
-  const Options options;
+  // ~44 features a frame, the regime the rule is for: with the second search at twice the size
+  // (feature_target) every closure of these frames passes on one frame's check.
+  Options options;
+  options.feature_target = 0;
   const auto straight =
       mapFrames(seq, "lip6_outdoor_120x96", "ClosureEvidenceRuns_straight", options, {});
   std::set<std::size_t> by_runs, stops;

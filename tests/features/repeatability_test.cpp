@@ -68,6 +68,7 @@ TEST(SurfRepeatability, MeetsFloorsAndStaysNearKaze) {
   FeatureOptions options;
   options.hessian_threshold = 500;  // RTAB-Map's SURF default, which the floors were measured at
   options.max_features = 400;       // the same budget for both, as a map would use
+  options.feature_target = 0;       // the detector at the image's own size, as KAZE's
   options.extractor = "surf";
   const auto surf = makeFeatureExtractor(options);
   options.extractor = "kaze";

@@ -154,11 +154,33 @@ TEST(SurfBehaviour, FeatureTargetSearchesAStarvedImageAgainAtTwiceItsSize) {
   EXPECT_TRUE(bitIdentical(finer, surfOf(small, options)));
 }
 
-TEST(SurfBehaviour, FeatureTargetLeavesAnImageWithOverHalfOfItAlone) {
+TEST(SurfBehaviour, FeatureTargetSearchesAgainAnImageWithFewerThanIt) {
+  // More than half the target: the old rule (feature_retry 0.5) left such an image alone, and a
+  // 160x120 camera with ~55 features a frame never reached the finer search.
+  cv::Mat small;
+  cv::resize(testImage(), small, cv::Size(), 0.375, 0.375, cv::INTER_AREA);
+  FeatureOptions options;
+  options.feature_target = 0;
+  const Features native = surfOf(small, options);
+  ASSERT_GT(native.size(), 4u);
+  options.feature_target = static_cast<int>(native.size()) * 3 / 2;
+  const Features finer = surfOf(small, options);
+  EXPECT_FALSE(bitIdentical(native, finer));
+  EXPECT_GE(finer.size(), native.size());
+  EXPECT_LE(finer.size(), static_cast<std::size_t>(options.feature_target));
+  EXPECT_EQ(finer.image_size, small.size());
+  options.feature_retry = 0.5;
+  EXPECT_TRUE(bitIdentical(native, surfOf(small, options)));
+}
+
+TEST(SurfBehaviour, FeatureTargetLeavesAnImageWithMoreThanItAlone) {
   const cv::Mat image = testImage();
   FeatureOptions options;
   options.feature_target = 0;
   const Features plain = surfOf(image, options);
+  options.feature_target = static_cast<int>(plain.size()) - 1;
+  EXPECT_TRUE(bitIdentical(plain, surfOf(image, options)));
+  options.feature_retry = 0.5;
   options.feature_target = 2 * static_cast<int>(plain.size()) - 1;  // more than half of it
   EXPECT_TRUE(bitIdentical(plain, surfOf(image, options)));
 }

@@ -131,6 +131,38 @@ TEST(GeometricCheck, EitherRulePassesFewPairsWithStrongEvidence) {
   EXPECT_TRUE(r.passed) << "log10 NFA " << r.log10_nfa;
 }
 
+TEST(GeometricCheck, AgreementDistanceIsAShareOfTheDiagonalOnSmallImages) {
+  GeometricCheckSettings settings;  // 3 px, at most 1 % of the diagonal
+  EXPECT_DOUBLE_EQ(agreementDistance(settings, cv::Size(240, 192)), 3.0);
+  EXPECT_DOUBLE_EQ(agreementDistance(settings, cv::Size(960, 540)), 3.0);
+  EXPECT_NEAR(agreementDistance(settings, cv::Size(120, 96)), 0.01 * std::hypot(120, 96), 1e-12);
+  EXPECT_DOUBLE_EQ(agreementDistance(settings, cv::Size()), 3.0) << "size unknown: pixels alone";
+  settings.max_error_diagonal = 0;
+  EXPECT_DOUBLE_EQ(agreementDistance(settings, cv::Size(120, 96)), 3.0);
+}
+
+TEST(GeometricCheck, ASmallImageCountsOnlyCloseAgreement) {
+  std::mt19937 rng(31);
+  TwoViews v = rigidScene(rng);
+  // The same scene on a 120x96 sensor, the candidate's keypoints 1.6-2.6 px off: within 3 px of
+  // their epipolar lines, as chance pairs would be twice as often on this image as on 240x192.
+  std::uniform_real_distribution<float> radius(1.6f, 2.6f), angle(0.f, 6.2831853f);
+  for (auto* points : {&v.query.points, &v.candidate.points})
+    for (auto& p : *points) p *= 0.5f;
+  for (auto& p : v.candidate.points) {
+    const float r = radius(rng), a = angle(rng);
+    p += cv::Point2f(r * std::cos(a), r * std::sin(a));
+  }
+  GeometricCheckSettings settings;
+  settings.rule = GeometryRule::kInliers;
+  settings.exhaustive = true;
+  const GeometricResult in_pixels = checkGeometry(v.query, v.candidate, settings);
+  v.query.image_size = cv::Size(120, 96);
+  const GeometricResult in_share = checkGeometry(v.query, v.candidate, settings);
+  EXPECT_TRUE(in_pixels.passed) << in_pixels.inliers << " inliers";
+  EXPECT_LT(in_share.inliers, in_pixels.inliers);
+}
+
 TEST(GeometricCheck, TooLittleOverlapFails) {
   std::mt19937 rng(19);
   TwoViews v = rigidScene(rng);

@@ -48,7 +48,8 @@ struct Options {
   int intervals = 2;              // SURF intervals (layers) per octave
   bool upright = false;           // U-SURF: no orientation
   int max_features = 600;         // strongest kept; 0 keeps all
-  int feature_target = 100;       // half as many or fewer: detect again at twice the size
+  int feature_target = 100;       // fewer (x feature_retry): detect again at twice the size
+  double feature_retry = 1;       // share of feature_target under which that is done, 0 = off
   double min_response = 0;        // features under this response are dropped
   double bad_ratio = 0.25;        // fewer features than this x running mean: a bad frame
 
@@ -95,7 +96,9 @@ struct Options {
                                        // 0 = no check
   double geometry_min_overlap = 0.05;  // nfa rule: and inliers at least this share of keypoints
   double geometry_max_error_px = 3.0;  // epipolar distances above this never count as agreement
-  double geometry_match_ratio = 0.8;   // descriptor ratio test for the check's matches
+  double geometry_max_error_diagonal = 0.01;  // ... nor above this share of the image's
+                                              // diagonal (small images); 0 = pixels alone
+  double geometry_match_ratio = 0.8;          // descriptor ratio test for the check's matches
 
   // --- temporal consistency (iBoW-LCD's islands; RTAB-Map's closures that follow the graph) ---
   // A hypothesis that misses the check's rule still passes a relaxed one (temporal_min_inliers,
@@ -132,7 +135,8 @@ struct Options {
                               const Options& base);
   static Options fromSettings(const std::map<std::string, std::string>& settings);
   // A session's settings as a map stored them: a setting added after that session began takes
-  // the value that reproduces it (feature_target 0), so a resumed session decides as it did.
+  // the value that reproduces it (feature_target 0, feature_retry 0.5, geometry_max_error_diagonal
+  // 0), so a resumed session decides as it did.
   static Options fromStoredSettings(const std::map<std::string, std::string>& settings);
   std::map<std::string, std::string> toSettings() const;
   void validate() const;

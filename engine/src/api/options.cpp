@@ -153,8 +153,12 @@ const std::vector<Row>& table() {
       integer("max_features", &Options::max_features, 0, 100000, "0..100000",
               "strongest features kept per image, 0 = all"),
       integer("feature_target", &Options::feature_target, 0, 100000, "0..100000",
-              "SURF: an image with at most half this many features is searched again at twice "
-              "its size, keeping at most this many; 0 = off"),
+              "SURF: an image with at most feature_retry x this many features is searched again "
+              "at twice its size, keeping at most this many; 0 = off"),
+      real("feature_retry", &Options::feature_retry, 0, 1, "0..1",
+           "share of feature_target at or under which an image is searched again at twice its "
+           "size (the finer features replace its own when 1/feature_retry times as many); 0 = "
+           "off"),
       real("min_response", &Options::min_response, 0, 1e30, "0..1e30",
            "features with a weaker detector response are dropped"),
       real("bad_ratio", &Options::bad_ratio, 0, 1, "0..1",
@@ -226,6 +230,10 @@ const std::vector<Row>& table() {
       real("geometry_max_error_px", &Options::geometry_max_error_px, 0.1, 100, "0.1..100",
            "geometric check: largest distance of a keypoint from its epipolar line that counts "
            "as agreement, in pixels"),
+      real("geometry_max_error_diagonal", &Options::geometry_max_error_diagonal, 0, 1, "0..1",
+           "geometric check: nor above this share of the image's diagonal (on small images), "
+           "so that chance agreement stays as rare as on larger ones; 0 = "
+           "geometry_max_error_px alone"),
       real("geometry_match_ratio", &Options::geometry_match_ratio, 0.1, 1, "0.1..1",
            "geometric check: nearest/second-nearest descriptor distance ratio for a match"),
       integer("temporal_min_inliers", &Options::temporal_min_inliers, 0, 10000, "0..10000",
@@ -311,6 +319,8 @@ Options Options::fromSettings(const std::map<std::string, std::string>& settings
 Options Options::fromStoredSettings(const std::map<std::string, std::string>& settings) {
   Options before;
   before.feature_target = 0;
+  before.feature_retry = 0.5;
+  before.geometry_max_error_diagonal = 0;
   return fromSettings(settings, before);
 }
 

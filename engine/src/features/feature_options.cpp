@@ -43,6 +43,7 @@ void validateFeatureOptions(const FeatureOptions& options) {
   requireInRange("intervals", options.intervals, 1, 8, "[1, 8]");
   requireInRange("max_features", options.max_features, 0, 1000000, "[0, 1000000], 0 = no limit");
   requireInRange("feature_target", options.feature_target, 0, 1000000, "[0, 1000000], 0 = off");
+  requireInRange("feature_retry", options.feature_retry, 0.0, 1.0, "[0, 1], 0 = off");
   requireInRange("min_response", options.min_response, 0.0f, 1e30f, "[0, 1e30]");
   requireInRange("threads", options.threads, 0, 64, "[0, 64], 0 = all hardware threads");
   requireInRange("sift_contrast_threshold", options.sift_contrast_threshold, 1e-9, 1.0, "(0, 1]");

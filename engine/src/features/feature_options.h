@@ -36,10 +36,11 @@ struct FeatureOptions {
   // Keep at most this many features, strongest response first; 0 keeps all (ORB: 0 means 1000,
   // because OpenCV's ORB needs a cap). Range [0, 1000000].
   int max_features = Options().max_features;
-  // SURF: an image with at most half this many features is searched again at twice its size,
-  // and at most this many of the finer features are kept when they at least double the count.
-  // 0 turns it off. Range [0, 1000000].
+  // SURF: an image with at most feature_retry x this many features is searched again at twice
+  // its size, and at most this many of the finer features are kept when they number at least
+  // 1 / feature_retry times its own. 0 turns it off. Range [0, 1000000].
   int feature_target = Options().feature_target;
+  double feature_retry = Options().feature_retry;  // Range [0, 1], 0 = off.
   // Drop features whose detector response is below this (in each detector's own units).
   // Range: [0, 1e30].
   float min_response = static_cast<float>(Options().min_response);

@@ -28,6 +28,7 @@ struct Features {
   int dim = 0;                      // floats (or bytes, for binary) per descriptor
   std::vector<Keypoint> keypoints;  // strongest response first
   cv::Mat descriptors;              // keypoints.size() x dim, CV_32F (or CV_8U), continuous
+  cv::Size image_size;              // of the image the keypoints are in, pixels (0 x 0: unknown)
   std::size_t size() const { return keypoints.size(); }
 };
 

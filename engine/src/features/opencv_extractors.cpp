@@ -22,8 +22,10 @@ Features OpenCvExtractor::extract(const cv::Mat& grey8) const {
   detector_->detectAndCompute(grey8, cv::noArray(), keypoints, descriptors);
   if (keypoints.empty())
     descriptors = cv::Mat(0, dim_, type_ == DescriptorType::kFloat32 ? CV_32F : CV_8U);
-  return makeFeatures(name_, type_, dim_, keypoints, descriptors, options_.max_features,
-                      options_.min_response);
+  Features features = makeFeatures(name_, type_, dim_, keypoints, descriptors,
+                                   options_.max_features, options_.min_response);
+  features.image_size = grey8.size();
+  return features;
 }
 
 SiftExtractor::SiftExtractor(const FeatureOptions& options)

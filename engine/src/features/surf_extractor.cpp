@@ -56,18 +56,22 @@ Features SurfExtractor::extract(const cv::Mat& grey8) const {
   const int threads = resolveThreadCount(options_.threads);
   Detection chosen = detect(grey8, options_.max_features, threads);
   // Too few blobs at the detector's finest scale: look again on the image doubled (Lowe's first
-  // octave), where blobs of one or two pixels become detectable. Four times the area costs four
-  // times the detection, so it is done only where it can at least double the count, up to the
-  // target: an image with half the target or fewer. Keypoints come back in this image's own
-  // pixels, so the check and a pose see the image the caller gave.
+  // octave), where blobs of one or two pixels become detectable. An image with at most
+  // feature_retry x the target is searched again, and the finer features, at most the target of
+  // them, replace its own when they number at least 1 / feature_retry times as many. An image
+  // that reached max_features is not starved, whatever the target. Keypoints come back in this
+  // image's own pixels, so the check and a pose see the image the caller gave.
   bool doubled = false;
   const int target = options_.feature_target;
-  if (target > 0 && 2 * chosen.keypoints.size() <= static_cast<std::size_t>(target)) {
+  const double retry = options_.feature_retry;
+  const double count = static_cast<double>(chosen.keypoints.size());
+  const bool capped = options_.max_features > 0 && count >= options_.max_features;
+  if (target > 0 && retry > 0 && count <= retry * target && !capped) {
     cv::Mat twice;
     cv::resize(grey8, twice, cv::Size(), 2.0, 2.0, cv::INTER_LINEAR);
     const int cap = options_.max_features > 0 ? std::min(options_.max_features, target) : target;
     Detection finer = detect(twice, cap, threads);
-    if (finer.keypoints.size() >= 2 * chosen.keypoints.size()) {
+    if (static_cast<double>(finer.keypoints.size()) * retry >= count) {
       chosen = std::move(finer);
       doubled = true;
     }
@@ -81,7 +85,9 @@ Features SurfExtractor::extract(const cv::Mat& grey8) const {
       k.size *= 0.5f;
     }
   }
-  return makeFeatures(name(), type(), dim(), keypoints, descriptors, 0, 0.0f);
+  Features features = makeFeatures(name(), type(), dim(), keypoints, descriptors, 0, 0.0f);
+  features.image_size = grey8.size();
+  return features;
 }
 
 }  // namespace placedb

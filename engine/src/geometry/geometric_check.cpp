@@ -50,6 +50,13 @@ int minimumInliers(double overlap, int keypoints) {
   return static_cast<int>(std::ceil(overlap * keypoints - 1e-9));
 }
 
+double agreementDistance(const GeometricCheckSettings& settings, cv::Size image_size) {
+  if (settings.max_error_diagonal <= 0 || image_size.width <= 0 || image_size.height <= 0)
+    return settings.max_error_px;
+  return std::min(settings.max_error_px,
+                  settings.max_error_diagonal * std::hypot(image_size.width, image_size.height));
+}
+
 cv::Size2f keypointExtent(const std::vector<cv::Point2f>& points) {
   if (points.empty()) return {1.f, 1.f};
   float x0 = points[0].x, x1 = x0, y0 = points[0].y, y1 = y0;
@@ -221,12 +228,14 @@ GeometricResult checkGeometry(const GeometricView& query, const GeometricView& c
                               const GeometricCheckSettings& settings) {
   const cv::Size2f extent = keypointExtent(candidate.points);
   const int keypoints = static_cast<int>(std::min(query.points.size(), candidate.points.size()));
+  GeometricCheckSettings s = settings;
+  s.max_error_px = agreementDistance(settings, query.image_size);
   const Pairs words = wordPairs(query, candidate);
-  GeometricResult by_words = fit(words, extent, keypoints, settings);
+  GeometricResult by_words = fit(words, extent, keypoints, s);
   if (by_words.passed) by_words.from_words = true;
-  if (by_words.passed && !settings.exhaustive) return by_words;
-  const GeometricResult by_descriptors = fit(
-      descriptorPairs(query, candidate, words, settings.match_ratio), extent, keypoints, settings);
+  if (by_words.passed && !s.exhaustive) return by_words;
+  const GeometricResult by_descriptors =
+      fit(descriptorPairs(query, candidate, words, s.match_ratio), extent, keypoints, s);
   return strongerThan(by_words, by_descriptors, settings.rule) ? by_words : by_descriptors;
 }
 

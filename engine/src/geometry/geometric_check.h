@@ -32,6 +32,14 @@
 // pairs agreeing far beyond chance (12 of 13 within a pixel on a 160x128 image) pass without
 // the count, while the same-street pairs, at NFA 1e-1..1e1, do not. bench/quality/README.md
 // has the figures of all three.
+//
+// The distance that counts as agreement is max_error_px (keypoint localisation), but at most
+// max_error_diagonal of the query image's diagonal. The inliers rule counts pairs, and under
+// the null model above a pair agrees by chance with probability alpha = 2 D eps / A: at 3 px
+// a 120x96 image has twice the alpha of a 240x192 one, and 13 agreeing pairs among ~100
+// features are no longer rare there. A distance in proportion to the diagonal keeps alpha at
+// 2 max_error_diagonal D^2 / A whatever the size (0.041 at 1 %, for 4:3 and 5:4 images), so a
+// count means the same at every size; at 1 % an image of 240x192 or more keeps 3 px.
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -50,7 +58,8 @@ struct GeometricCheckSettings {
   double max_nfa = Options().geometry_max_nfa;            // nfa rule: expected false alarms at most
   double min_overlap = Options().geometry_min_overlap;    // nfa rule: inliers / keypoints at least
   double max_error_px = Options().geometry_max_error_px;  // farther from the epipolar line: out
-  double match_ratio = Options().geometry_match_ratio;    // nearest / second-nearest distance
+  double max_error_diagonal = Options().geometry_max_error_diagonal;  // ... or this x diagonal
+  double match_ratio = Options().geometry_match_ratio;  // nearest / second-nearest distance
   int iterations = 400;  // RANSAC samples at most, per set of correspondences
   // Off (mapping): stop as soon as the rule is met, so the inliers counted can stop there too.
   // On (ranking several candidates, as query does): no early exit, and both the word pairs and
@@ -82,7 +91,12 @@ struct GeometricView {  // keypoints and one descriptor row per keypoint
   std::vector<std::int64_t> words;  // each keypoint's word, -1 for none; may be empty
   // The descriptors' codes, when the caller keeps them (the check rounds them otherwise).
   std::shared_ptr<const DescriptorCodes> codes;
+  cv::Size image_size;  // of the query's image: bounds the agreement distance (0 x 0: unknown)
 };
+
+// The distance that counts as agreement on an image of `image_size`: max_error_px, or
+// max_error_diagonal of its diagonal when that is less.
+double agreementDistance(const GeometricCheckSettings& settings, cv::Size image_size);
 
 // Whether a is the better result by the rule's own measure (more inliers, or a lower NFA).
 bool strongerThan(const GeometricResult& a, const GeometricResult& b, GeometryRule rule);

@@ -164,6 +164,7 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
     GeometricView view;
     view.descriptors = features.descriptors;
     for (const auto& k : features.keypoints) view.points.emplace_back(k.x, k.y);
+    view.image_size = features.image_size;
     view.words = q.word_of_feature;
     view.codes = std::make_shared<const DescriptorCodes>(
         quantiseDescriptors(features.descriptors, kQueryCodeLevels));

@@ -194,6 +194,7 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   query.points.reserve(features.size());
   for (const auto& k : features.keypoints) query.points.emplace_back(k.x, k.y);
   query.words = word_of_feature;
+  query.image_size = features.image_size;
   query.codes = std::make_shared<const DescriptorCodes>(
       quantiseDescriptors(features.descriptors, kQueryCodeLevels));
   std::map<LocationId, GeometricResult> checked_continuing;

@@ -11,6 +11,7 @@ FeatureOptions toFeatureOptions(const Options& o) {
   f.upright = o.upright;
   f.max_features = o.max_features;
   f.feature_target = o.feature_target;
+  f.feature_retry = o.feature_retry;
   f.min_response = static_cast<float>(o.min_response);
   f.threads = o.threads;
   return f;
@@ -58,6 +59,7 @@ GeometricCheckSettings toGeometricCheckSettings(const Options& o) {
   g.min_inliers = o.geometry_min_inliers;
   g.min_overlap = o.geometry_min_overlap;
   g.max_error_px = o.geometry_max_error_px;
+  g.max_error_diagonal = o.geometry_max_error_diagonal;
   g.match_ratio = o.geometry_match_ratio;
   return g;
 }
