@@ -1,6 +1,7 @@
 // Writes a resized copy of every image of a frame list, for benchmarks at another resolution
 // (bench/quality/verification_timing.py: lip6_outdoor at 960x540). The copies keep their file
-// names; the aspect ratio is not kept when WIDTH x HEIGHT asks otherwise.
+// names; the aspect ratio is not kept when WIDTH x HEIGHT asks otherwise. A smaller copy averages
+// the pixels it covers (what a camera of that resolution would see), a larger one is cubic.
 //
 //   placedb_resize_frames LIST OUT_DIR WIDTH HEIGHT
 #include <fmt/format.h>
@@ -34,7 +35,8 @@ int main(int argc, char** argv) {
       }
       cv::Mat resized;
       // Cubic: an upscaled frame should look like a sharp camera's, not a blocky one.
-      cv::resize(image, resized, size, 0, 0, cv::INTER_CUBIC);
+      const bool smaller = size.area() < image.size().area();
+      cv::resize(image, resized, size, 0, 0, smaller ? cv::INTER_AREA : cv::INTER_CUBIC);
       const auto target = out / std::filesystem::path(frame).filename();
       if (!cv::imwrite(target.string(), resized)) {
         fmt::print(stderr, "cannot write {}\n", target.string());

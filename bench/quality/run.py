@@ -6,10 +6,16 @@ Usage: bench/quality/run.py [--build DIR] [--datasets DIR] [--scorer PATH] [--ou
                             [--rules greedy,nndr] [--sequences lip6,lip6_half,samples,lip6_160,lip6_120]
                             [--set key=value]...
 Settings given with --set apply to every run (defaults otherwise: no per-sequence tuning).
+
+samples_160 and samples_128 are rtabmap_samples (an indoor corridor, driven twice) shrunk to
+160x120 and 128x96 by `placedb_resize_frames` into OUT/derived/: a low-resolution indoor camera,
+another place and camera than lip6's. They are not in the default list: no rule is chosen on
+them; they check that one chosen on lip6 holds elsewhere.
 """
 import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 
@@ -23,6 +29,29 @@ SEQUENCES = {  # name: (folder, frame list, ground truth)
     'lip6_160': ('lip6_outdoor_160x128', 'frames.txt', 'gt_pairs.txt'),
     'lip6_120': ('lip6_outdoor_120x96', 'frames.txt', 'gt_pairs.txt'),
 }
+DERIVED = {  # name: (sequence it shrinks, width, height)
+    'samples_160': ('samples', 160, 120),
+    'samples_128': ('samples', 128, 96),
+}
+
+
+def derive(build, datasets, name, out_dir):
+    """A resized copy of a sequence: its folder, with frames.txt and the same ground truth."""
+    source, width, height = DERIVED[name]
+    folder, frames, gt = SEQUENCES[source]
+    base = os.path.join(datasets, folder)
+    target = os.path.join(out_dir, 'derived', name)
+    if not os.path.exists(os.path.join(target, 'frames.txt')):
+        images = os.path.join(target, 'images')
+        resizer = os.path.join(build, 'bench', 'quality', 'placedb_resize_frames')
+        subprocess.run([resizer, os.path.join(base, frames), images, str(width), str(height)],
+                       check=True)
+        with open(os.path.join(base, frames)) as f:
+            names = [os.path.basename(line.strip()) for line in f if line.strip()]
+        with open(os.path.join(target, 'frames.txt'), 'w') as f:
+            f.writelines(f'images/{n}\n' for n in names)
+        shutil.copy(os.path.join(base, gt), os.path.join(target, 'gt_pairs.txt'))
+    return target, 'frames.txt', 'gt_pairs.txt'
 
 
 def score(scorer, log, gt, window):
@@ -32,8 +61,12 @@ def score(scorer, log, gt, window):
 
 
 def run_one(runner, datasets, name, rule, settings, out_dir, scorer):
-    folder, frames, gt = SEQUENCES[name]
-    base = os.path.join(datasets, folder)
+    if name in DERIVED:
+        base, frames, gt = derive(os.path.dirname(os.path.dirname(os.path.dirname(runner))),
+                                  datasets, name, out_dir)
+    else:
+        folder, frames, gt = SEQUENCES[name]
+        base = os.path.join(datasets, folder)
     log = os.path.join(out_dir, f'{name}_{rule}.csv')
     cmd = [runner, os.path.join(base, frames), '--log', log, '--set', f'word_rule={rule}']
     for s in settings:
