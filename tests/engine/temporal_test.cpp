@@ -140,8 +140,11 @@ TEST_F(TemporalTest, WeakHypothesesNextToThePreviousClosureAreAcceptedAndRight) 
 
   // What it adds in all is measured where revisits have few features (ClosureRunGaps): on the
   // corridor, a weak continuation often stands in for a jump that passes on its own.
-  for (std::size_t i = 0; i < with.size(); ++i)
-    if (with[i].accepted) EXPECT_TRUE(rightPlace(i, with[i])) << "frame " << i;
+  for (std::size_t i = 0; i < with.size(); ++i) {
+    if (with[i].accepted) {
+      EXPECT_TRUE(rightPlace(i, with[i])) << "frame " << i;
+    }
+  }
 }
 
 TEST_F(TemporalTest, ResumingJustBeforeAWeakClosureGivesTheSameResult) {
