@@ -99,8 +99,7 @@ void MapImpl::startSessionMemory(std::int64_t session_id) {
   counters_.last_session = session_id;
 }
 
-SessionInfo MapImpl::beginSideSession(const std::string& source,
-                                      const std::string& source_digest) {
+SessionInfo MapImpl::beginSideSession(const std::string& source, const std::string& source_digest) {
   // The place codes' centres come from the main line's first location: a side session that
   // trained its own would make codes no other writer could compare.
   if (!store_->getState(kPlaceCoderKey))
@@ -120,6 +119,9 @@ SessionInfo MapImpl::beginSideSession(const std::string& source,
     startSessionMemory(id);
     // The main line's blocks stay the main line's: this session reserves its own.
     counters_.frame_block_end = counters_.location_block_end = counters_.word_block_end = 0;
+    // Another robot's camera: the main line's feature counts say nothing of what a bad frame of
+    // this one is (rtabmap_samples after lip6_outdoor's mean would lose 4 of its 43 closures).
+    counters_.feature_sum = counters_.feature_frames = 0;
     counters_.save(*store_);
     tx.commit();
     session_id_ = id;

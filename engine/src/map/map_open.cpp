@@ -96,8 +96,11 @@ void MapImpl::restoreFromStore() {
                     fmt::format("{}: locations row {} is damaged: weight {} is negative",
                                 store_->path(), row.id, row.weight));
       const auto age = ages.find(row.id);
-      snapshot.locations.push_back(
-          {row.id, tier, row.weight, age == ages.end() ? row.id : age->second});
+      std::int64_t entered = age == ages.end() ? row.id : age->second;
+      // A location in LTM gets a new age when it comes back, so its own is never used; places
+      // other writers stored have none in this writer's order (map_fleet.cpp).
+      if (tier == Tier::kLtm) entered = std::min(entered, snapshot.next_age - 1);
+      snapshot.locations.push_back({row.id, tier, row.weight, entered});
       if (tier == Tier::kStm) snapshot.stm.push_back(row.id);
       if (tier != Tier::kLtm) live.push_back(row.id);
     }

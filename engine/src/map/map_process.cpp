@@ -39,6 +39,10 @@ struct MapImpl::FrameWrite {
   std::optional<std::vector<std::int8_t>> place_code;       // the new location's
   std::vector<std::uint8_t> place_coder;                    // the centres, once per map
   std::vector<std::pair<std::int64_t, std::int64_t>> ages;  // locations entering STM/WM
+  // The hypothesis whose frames the result names, read in the frame's transaction: once the
+  // commit returns, the frame needs nothing more from the map, so a lost connection or a kill
+  // after it cannot separate a committed frame from its result.
+  std::optional<std::int64_t> frames_of;
 };
 
 FrameResult MapImpl::process(const cv::Mat& image, std::int64_t source_index,
@@ -155,8 +159,8 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
   times.memory = search_ms + msSince(stage);
 
   r.times = times;
+  if (hypothesis != kNewPlace) w.frames_of = hypothesis;
   commit(w, r, source_path);
-  if (hypothesis != kNewPlace) r.hypothesis.frames = framesOf(hypothesis);
   return r;
 }
 
@@ -513,6 +517,7 @@ void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_pa
         storage_ms,
         t.features + t.quantisation + t.likelihood + t.filter + t.memory + storage_ms};
     store_->insertFrame(w.frame);
+    if (w.frames_of) r.hypothesis.frames = framesOf(*w.frames_of);
     tx.commit();
   } catch (...) {
     broken_ = true;  // RAM is one frame ahead of the file now
