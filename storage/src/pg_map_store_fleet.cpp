@@ -40,9 +40,8 @@ bool PgMapStore::sharedByWriters() const { return true; }
 bool PgMapStore::claimMainLine() {
   if (read_only_) return false;
   if (!main_line_)
-    main_line_ =
-        db_->run("SELECT pg_try_advisory_lock($1)", detail::PgParams().add(kWriterLockKey))
-            .boolean(0, 0);
+    main_line_ = db_->run("SELECT pg_try_advisory_lock($1)", detail::PgParams().add(kWriterLockKey))
+                     .boolean(0, 0);
   return main_line_;
 }
 
@@ -277,12 +276,12 @@ std::vector<KdNodeRecord> PgMapStore::sideLoadKdNodes() const {
   std::vector<KdNodeRecord> out;
   out.reserve(r.rows());
   for (int i = 0; i < r.rows(); ++i) {
-    KdNodeRecord n{static_cast<int>(r.integer(i, 0)), r.integer(i, 1),
-                   r.integer(i, 2),                   r.integer(i, 3),
-                   static_cast<int>(r.integer(i, 4)), r.real(i, 5)};
+    KdNodeRecord n{
+        static_cast<int>(r.integer(i, 0)), r.integer(i, 1), r.integer(i, 2), r.integer(i, 3),
+        static_cast<int>(r.integer(i, 4)), r.real(i, 5)};
     if (!sumMatches(r, i, 6,
-                    detail::kdNodeChecksum(n.tree, n.node, n.left_child, n.right_child,
-                                           n.split_dim, n.split_value)))
+                    detail::kdNodeChecksum(n.tree, n.node, n.left_child, n.right_child, n.split_dim,
+                                           n.split_value)))
       detail::refuseDamagedRow(label_, "session_kd_nodes",
                                "(session " + std::to_string(side_session_) + ", tree " +
                                    std::to_string(n.tree) + ", node " + std::to_string(n.node) +
