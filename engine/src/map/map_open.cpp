@@ -337,11 +337,14 @@ std::string MapImpl::checkConsistency() const {
   if (std::vector<std::int64_t>(words.begin(), words.end()) != in_vocabulary)
     return fmt::format("vocabulary holds {} words, STM+WM (and imports) reference {}",
                        in_vocabulary.size(), words.size());
-  // The file agrees with RAM on every tier.
+  // The file agrees with RAM on every tier (this writer's own tiers, on a fleet map).
+  std::map<std::int64_t, Tier> stored_tier;
+  for (Tier tier : {Tier::kStm, Tier::kWm})
+    for (const auto& row : store_->locationsInTier(tier)) stored_tier[row.id] = tier;
   for (std::int64_t id : live) {
-    auto stored = store_->location(id);
-    if (!stored) return fmt::format("location {} is not in the file", id);
-    if (stored->tier != tiers_->tierOf(id))
+    if (!store_->location(id)) return fmt::format("location {} is not in the file", id);
+    const auto stored = stored_tier.find(id);
+    if (stored == stored_tier.end() || stored->second != tiers_->tierOf(id))
       return fmt::format("location {} has another tier on file", id);
   }
   return {};
