@@ -7,6 +7,7 @@
 #include <string>
 
 #include "pg_test_server.h"
+#include "placedb/storage/map_check.h"
 #include "placedb/storage/map_store.h"
 #include "storage_test_util.h"
 #include "test_paths.h"
@@ -165,6 +166,32 @@ TEST(PgFleetStore, PlacesOfOtherSessionsAfterTheMarks) {
   EXPECT_EQ(places[0].code, std::vector<std::int8_t>(8, 3));
   EXPECT_TRUE(places[1].code.empty());
   EXPECT_TRUE(store->placesAfter(s1, {}).empty());  // its own are not another's
+}
+
+TEST(PgFleetStore, CheckVerifiesTheSideSessionsRows) {
+  PLACEDB_REQUIRE_PG_SERVER(server);
+  const std::string uri = freshPgDatabase(server, pgTestDatabaseName());
+  auto main = openMapStore(uri, OpenMode::kReadWrite);
+  const auto s1 = main->beginSession("a", {}, "test");
+  testing::writeFrame(*main, s1, 0);
+  main->writeKdNodes({{0, 0, 1, 2, 5, 0.5}, {0, 1, 3, 4, 6, 0.25}}, {}, false);
+  auto side = sideWriter(uri);
+  {
+    Transaction tx = side->begin();
+    side->beginSideSession("b", {}, "test");
+    tx.commit();
+  }
+  EXPECT_TRUE(checkMap(uri).ok());
+  placedb::testing::pgAdmin(uri, "UPDATE session_kd_nodes SET split_value = 0.75 WHERE node = 0");
+  placedb::testing::pgAdmin(uri, "DELETE FROM session_kd_nodes WHERE node = 1");
+  const CheckReport report = checkMap(uri);
+  ASSERT_EQ(report.findings_total, 2);
+  EXPECT_EQ(report.findings[0].table, "session_kd_nodes");
+  EXPECT_NE(report.findings[0].problem.find("checksum"), std::string::npos);
+  EXPECT_NE(report.findings[1].problem.find("holds 1 rows where the map recorded 2"),
+            std::string::npos)
+      << report.findings[1].problem;
+  EXPECT_EQ(report.rows_checked.at("session_kd_nodes"), 1);
 }
 
 // A file has one writer: it holds the main line, no side session begins, and a side session a
