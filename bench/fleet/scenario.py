@@ -114,19 +114,29 @@ def read_log(path):
         return list(csv.DictReader(f))
 
 
-def closures(log_rows, gt, window, frame_offset=0, session_offsets=None):
+def closures(log_rows, gt, window, frame_offset=0, session_offsets=None, same_route=False):
     """The accepted closures of one robot's log: those onto its own session, those onto the
     sessions of `session_offsets` ({session: offset of its frame 0 in the ground truth's
     numbering}), scored against `gt` (its frames numbered from frame_offset), and those onto any
-    other session. Every accepted row counts once."""
+    other session. Every accepted row counts once. A closure is right by score_loops.py's rule:
+    a candidate frame within `window` of a ground-truth reference of the frame. With same_route
+    (robots that drive the same route at once), also when the candidate is within `window` of
+    the frame itself or the frame of a reference of the candidate: the ground truth lists only
+    revisits (q > r) of one camera."""
     session_offsets = session_offsets or {}
+
+    def right(q, candidates):
+        if any(abs(c - r) <= window for c in candidates for r in gt.get(q, ())):
+            return True
+        return same_route and any(abs(c - q) <= window or
+                                  any(abs(q - r) <= window for r in gt.get(c, ()))
+                                  for c in candidates)
     out = {"accepted": 0, "own": 0, "own_right": 0, "cross": 0, "cross_right": 0, "foreign": 0}
     for row in log_rows:
         if row["accepted"] != "1":
             continue
         out["accepted"] += 1
         q = frame_offset + int(row["frame"])
-        refs = gt.get(q, ())
         others = [tuple(int(v) for v in c.split(":")) for c in row["other_candidates"].split()]
         if others:
             known = [session_offsets[s] + i for s, i in others if s in session_offsets]
@@ -134,11 +144,11 @@ def closures(log_rows, gt, window, frame_offset=0, session_offsets=None):
                 out["foreign"] += 1
                 continue
             out["cross"] += 1
-            out["cross_right"] += any(abs(c - r) <= window for c in known for r in refs)
+            out["cross_right"] += right(q, known)
         else:
             own = [frame_offset + int(c) for c in row["candidate_frames"].split()]
             out["own"] += 1
-            out["own_right"] += any(abs(c - r) <= window for c in own for r in refs)
+            out["own_right"] += right(q, own)
     return out
 
 
@@ -187,6 +197,30 @@ def copy_map(binary, source, destination):
         placedb(binary, "copy", source, destination)
     else:
         shutil.copyfile(source, destination)
+
+
+def server_cpu_seconds(folder):
+    """CPU time the server in `folder` used so far: the postmaster, its live children and those
+    it has reaped (each connection's backend is a child process)."""
+    tick = os.sysconf("SC_CLK_TCK")
+    with open(os.path.join(folder, "data", "postmaster.pid")) as f:
+        postmaster = int(f.readline())
+
+    def times(pid):
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        return int(fields[1]), [int(v) for v in fields[11:15]]  # ppid; utime stime cutime cstime
+
+    total = sum(times(postmaster)[1])
+    for pid in os.listdir("/proc"):
+        if pid.isdigit():
+            try:
+                ppid, t = times(pid)
+            except (OSError, IndexError):
+                continue
+            if ppid == postmaster:
+                total += t[0] + t[1]
+    return total / tick
 
 
 def wait_for_session(server_uri_of_map, count, timeout=60):

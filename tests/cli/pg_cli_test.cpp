@@ -212,8 +212,8 @@ TEST_F(PgCli, LeastPrivilegeRobotMapsAndQueriesWithAPasswordFile) {
   pgAdmin(uri, "GRANT USAGE ON SCHEMA public TO cli_fleet_robot");
   pgAdmin(uri, "GRANT SELECT, INSERT, UPDATE ON ALL TABLES IN SCHEMA public TO cli_fleet_robot");
   pgAdmin(uri,
-          "GRANT DELETE ON engine_state, filter_posterior, kd_nodes, locations, word_refs "
-          "TO cli_fleet_robot");
+          "GRANT DELETE ON engine_state, filter_posterior, kd_nodes, locations, word_refs, "
+          "session_state, session_kd_nodes, session_posterior, session_memory TO cli_fleet_robot");
 
   const std::string host = uri.substr(uri.find("host="), uri.find('&') - uri.find("host="));
   const fs::path pass_file = dir_ / "pgpass";
@@ -226,8 +226,15 @@ TEST_F(PgCli, LeastPrivilegeRobotMapsAndQueriesWithAPasswordFile) {
   ::setenv("PGSSLMODE", "prefer", 1);
   const std::string robot = "postgresql://cli_fleet_robot@/" + db + "?" + host + "&sslmode=disable";
 
-  auto mapped = placedb({"map", robot, list, "--new-session", "-q"}, dir_);
-  EXPECT_EQ(mapped.exit_code, 0) << describe(mapped);
+  {
+    // The owner writes too (it holds the main line): the robot's session is a side session,
+    // whose own memory it rewrites as it maps.
+    auto owner = storage::openMapStore(uri, storage::OpenMode::kReadWrite);
+    auto mapped = placedb({"map", robot, list, "--new-session", "-q"}, dir_);
+    EXPECT_EQ(mapped.exit_code, 0) << describe(mapped);
+    EXPECT_EQ(mapped.err.find("pass-file-secret"), std::string::npos) << mapped.err;
+    EXPECT_EQ(owner->sessionMemory(2), storage::SessionMemory::kOwn);
+  }
   auto query = placedb({"query", robot,
                         dataset("lip6_outdoor").string() + "/images/"
                                                            "outdoor_kennedylong_000006.png"},
@@ -236,7 +243,7 @@ TEST_F(PgCli, LeastPrivilegeRobotMapsAndQueriesWithAPasswordFile) {
   auto info = placedb({"info", robot}, dir_);
   EXPECT_EQ(info.exit_code, 0) << describe(info);
   EXPECT_NE(info.out.find("session 2: 8 frames"), std::string::npos) << info.out;
-  for (const auto& text : {mapped.err, query.out, query.err, info.out})
+  for (const auto& text : {query.out, query.err, info.out})
     EXPECT_EQ(text.find("pass-file-secret"), std::string::npos) << text;
 
   // Without the file, the same URI is refused as credentials (exit 12), in one line.

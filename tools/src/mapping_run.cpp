@@ -336,7 +336,14 @@ MappingSummary runOnce(const MappingRequest& request, std::chrono::steady_clock:
                         source->size()});
   }
   summary.dropped = source->dropped();
-  map->close();
+  try {
+    map->close();
+  } catch (const Error& e) {
+    // Every frame is committed; only the session's clean close is left, once the server is back.
+    if (e.code() != ErrorCode::kServerUnreachable || !storage::isServerMap(request.map_path)) throw;
+    map.reset();
+    reopenAfterLoss(request, options, summary.session_id, e).first->close();
+  }
   if (progress) progress->finish();
   summary.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
