@@ -303,8 +303,9 @@ void PgMapStore::sidePutPosterior(const std::vector<std::int64_t>& ids,
                                   const std::vector<double>& probabilities) {
   auto scope = writeScope();
   db_->send(
-      "WITH gone AS (DELETE FROM session_posterior WHERE session_id = $1 AND "
-      "location_id <> ALL($2)) INSERT INTO session_posterior (session_id, location_id, "
+      "WITH gone AS (DELETE FROM session_posterior p WHERE p.session_id = $1 AND NOT EXISTS "
+      "(SELECT 1 FROM unnest($2::int8[]) AS k(id) WHERE k.id = p.location_id)) "
+      "INSERT INTO session_posterior (session_id, location_id, "
       "probability) SELECT $1, * FROM unnest($2::int8[], $3::float8[]) ON CONFLICT (session_id, "
       "location_id) DO UPDATE SET probability = excluded.probability",
       detail::PgParams().add(side_session_).addArray(ids).addArray(probabilities));
