@@ -223,6 +223,18 @@ def server_cpu_seconds(folder):
     return total / tick
 
 
+def wait_for_frames(server_uri_of_map, session, count, timeout=300):
+    """Waits until `session` of the map holds `count` frames (its writer is under way)."""
+    deadline = time.time() + timeout
+    while time.time() < deadline:
+        rows = PgServer.sql(server_uri_of_map,
+                            f"SELECT count(*) FROM frames WHERE session_id = {int(session)}")
+        if int(rows[0][0]) >= count:
+            return
+        time.sleep(0.05)
+    raise RuntimeError(f"session {session} has no {count} frames after {timeout} s")
+
+
 def wait_for_session(server_uri_of_map, count, timeout=60):
     """Waits until the map holds `count` sessions (another writer has begun)."""
     deadline = time.time() + timeout

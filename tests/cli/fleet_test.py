@@ -62,7 +62,9 @@ def run_to_end(binary, uri, source, log, rng, server, kills):
     for _ in range(kills + 10):
         p = start_map(binary, uri, source, log, "--server-wait", "1")
         if not lost:
-            time.sleep(rng.uniform(1.0, 2.0))
+            # Once B maps: a server that cannot be reached at B's start is exit 11 at once.
+            fs.wait_for_frames(uri, 2, 5)
+            time.sleep(rng.uniform(0.2, 1.0))
             server.stop()
             time.sleep(5)
             err = p.communicate()[1]
@@ -186,7 +188,8 @@ def main():
         waited_uri = server.database("waited")
         fs.copy_map(pb, w("a.placedb"), waited_uri)
         p = start_map(pb, waited_uri, lists["B"], w("waited_b.csv"))
-        time.sleep(rng.uniform(2.0, 4.0))
+        fs.wait_for_frames(waited_uri, 2, 5)
+        time.sleep(rng.uniform(0.2, 2.0))
         server.stop()
         time.sleep(5)
         server.start()
