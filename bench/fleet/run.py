@@ -21,6 +21,7 @@ Usage: bench/fleet/run.py [--build BUILD] [--datasets DIR] [--work DIR] [--write
 import argparse
 import json
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -158,6 +159,7 @@ def main():
             print(f"{writers} writers done", file=sys.stderr, flush=True)
     finally:
         server.stop("immediate")
+        shutil.rmtree(server.folder, ignore_errors=True)
     print("| writers | map | frames | wall s | frames/s | frame ms p50 / p99 | storage ms mean | "
           "server CPU ms/frame | cross-robot closures (right) | onto another place | "
           "query ms p50 (known) |")
