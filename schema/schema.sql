@@ -1,4 +1,4 @@
--- placedb map schema: the current version (10), as one file.
+-- placedb map schema: the current version (11), as one file.
 -- It must equal the result of applying migrations/0001..N in order; a test compares
 -- sqlite_master of both. `sqlite3 new.db < schema/schema.sql` makes an empty placedb map.
 -- See schema/SCHEMA.md for the meaning of every table, column and view.
@@ -246,10 +246,61 @@ CREATE TABLE wm_entries (
   wm_age INTEGER NOT NULL
 );
 
+-- Fleet maps (schema 11): several writers of a map on a PostgreSQL server, each in a session
+-- of its own; the main line's memory stays in the tables above (SCHEMA.md, "Fleet maps").
+-- The id allocator of a map with several writers: each writer hands out frame, location and word
+-- ids from blocks [first, first + size) it reserves here, so no two writers give one id twice.
+CREATE TABLE id_blocks (
+  kind TEXT PRIMARY KEY CHECK (kind IN ('frame', 'location', 'word')),
+  next INTEGER NOT NULL              -- every id of this kind below it is used or reserved
+) WITHOUT ROWID;
+
+-- A session's own engine state (engine_state's writer keys: engine.counters, vocabulary.header,
+-- storage.kd_nodes.rows), with the same checksums.
+CREATE TABLE session_state (
+  session_id INTEGER NOT NULL REFERENCES sessions (id),
+  key TEXT NOT NULL,
+  value BLOB,
+  checksum INTEGER,
+  PRIMARY KEY (session_id, key)
+) WITHOUT ROWID;
+
+-- A session's own kd-forest (as kd_nodes).
+CREATE TABLE session_kd_nodes (
+  session_id INTEGER NOT NULL REFERENCES sessions (id),
+  tree INTEGER NOT NULL,
+  node INTEGER NOT NULL,
+  left_child INTEGER NOT NULL,
+  right_child INTEGER NOT NULL,
+  split_dim INTEGER NOT NULL,
+  split_value REAL NOT NULL,
+  checksum INTEGER,
+  PRIMARY KEY (session_id, tree, node)
+) WITHOUT ROWID;
+
+-- A session's own Bayes filter posterior (as filter_posterior: no key on the location, ids <= 0
+-- are the virtual "new place").
+CREATE TABLE session_posterior (
+  session_id INTEGER NOT NULL REFERENCES sessions (id),
+  location_id INTEGER NOT NULL,
+  probability REAL NOT NULL,
+  PRIMARY KEY (session_id, location_id)
+) WITHOUT ROWID;
+
+-- The locations in a session's own STM (0) and WM (1), with their age in its transfer order;
+-- every other location is in its long-term memory.
+CREATE TABLE session_memory (
+  session_id INTEGER NOT NULL REFERENCES sessions (id),
+  location_id INTEGER NOT NULL REFERENCES locations (id) ON DELETE CASCADE,
+  tier INTEGER NOT NULL CHECK (tier IN (0, 1)),
+  wm_age INTEGER,
+  PRIMARY KEY (session_id, location_id)
+) WITHOUT ROWID;
+
 -- kd_nodes' row count, with its CRC-32C (schema 8): an empty map has no kd-forest nodes.
 INSERT INTO engine_state (key, value, checksum) VALUES ('storage.kd_nodes.rows', '0', 4094527944);
 
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 10;
+PRAGMA user_version = 11;
 COMMIT;

@@ -34,6 +34,7 @@ target_sources(placedb_storage PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_links.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_state.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_tables.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_fleet.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_copy.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/records.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/row_checksums.cpp
@@ -45,6 +46,7 @@ target_sources(placedb_storage PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_store_words.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_store_state.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_store_tables.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_store_fleet.cpp
   ${PLACEDB_MIGRATIONS_CPP}
   ${PLACEDB_PG_MIGRATIONS_CPP})
 target_include_directories(placedb_storage PRIVATE ${CMAKE_CURRENT_LIST_DIR}/src)

@@ -32,6 +32,7 @@ const std::vector<Category>& categories() {
       {ErrorCode::kInternal, "InternalError", "internal"},
       {ErrorCode::kServerUnreachable, "ServerUnreachable", "server_unreachable"},
       {ErrorCode::kAuthRefused, "AuthRefused", "auth_refused"},
+      {ErrorCode::kServerLost, "ServerLost", "server_lost"},
   };
   return table;
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <memory>
 
 #include "database.h"
@@ -15,6 +16,9 @@
 
 namespace placedb::storage {
 namespace {
+
+// The first schema with fleet maps' tables (side sessions a copy may bring).
+constexpr int kFleetSchemaVersion = 11;
 
 using detail::Database;
 using detail::Statement;
@@ -131,6 +135,41 @@ class Checker {
                " (rows were deleted or added)");
   }
 
+  // Side sessions a copy of a fleet map brought (schema 11): their own engine state and
+  // kd-forest, with each session's forest row count, as the main line's.
+  void sideSessions() {
+    std::map<std::int64_t, std::string> recorded;
+    rows("session_state", "SELECT session_id, key, value, checksum FROM session_state",
+         [&](const Statement& s) {
+           const std::string key = s.columnText(1);
+           const auto [data, size] = s.columnBlobView(2);
+           if (!detail::checksumMatches(s, 3, detail::stateChecksum(key, data, size)))
+             return find("session_state", std::to_string(s.columnInt(0)) + " '" + key + "'",
+                         "fails its checksum");
+           if (key == detail::kKdNodeRowsKey) recorded[s.columnInt(0)] = s.columnText(2);
+         });
+    std::map<std::int64_t, std::int64_t> counted;
+    rows("session_kd_nodes",
+         "SELECT session_id, tree, node, left_child, right_child, split_dim, split_value, "
+         "checksum FROM session_kd_nodes",
+         [&](const Statement& s) {
+           ++counted[s.columnInt(0)];
+           if (!detail::checksumMatches(
+                   s, 7,
+                   detail::kdNodeChecksum(s.columnInt(1), s.columnInt(2), s.columnInt(3),
+                                          s.columnInt(4), s.columnInt(5), s.columnDouble(6))))
+             find("session_kd_nodes",
+                  "(session " + std::to_string(s.columnInt(0)) + ", tree " +
+                      std::to_string(s.columnInt(1)) + ", node " + std::to_string(s.columnInt(2)) +
+                      ")",
+                  "fails its checksum");
+         });
+    for (const auto& [session, text] : recorded)
+      if (text != std::to_string(counted[session]))
+        find("session_kd_nodes", "session " + std::to_string(session),
+             "holds " + std::to_string(counted[session]) + " rows where the map recorded " + text);
+  }
+
   // Values the engine refuses when it loads them, found here without loading the engine.
   void values() {
     progress("values", 0, 0);
@@ -210,6 +249,7 @@ CheckReport checkMap(const std::string& given_path, const CheckOptions& options)
     }
     checker.foreignKeys();
     if (report.checksums) checker.checksums();
+    if (report.schema_version >= kFleetSchemaVersion) checker.sideSessions();
     checker.values();
     if (report.ok() && options.last_check && report.schema_version == currentSchemaVersion()) {
       if (options.progress) options.progress({"engine state", 0, 0});

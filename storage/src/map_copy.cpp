@@ -70,6 +70,15 @@ const std::vector<TableColumns>& mapTables() {
        2},
       {"place_codes", {"location_id", "code", "checksum"}},
       {"wm_entries", {"location_id", "wm_age"}},
+      // Fleet maps (schema 11): the id allocator and the side sessions' own memory.
+      {"id_blocks", {"kind", "next"}},
+      {"session_state", {"session_id", "key", "value", "checksum"}, 2},
+      {"session_kd_nodes",
+       {"session_id", "tree", "node", "left_child", "right_child", "split_dim", "split_value",
+        "checksum"},
+       3},
+      {"session_posterior", {"session_id", "location_id", "probability"}, 2},
+      {"session_memory", {"session_id", "location_id", "tier", "wm_age"}, 2},
   };
   return kTables;
 }

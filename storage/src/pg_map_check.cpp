@@ -4,6 +4,7 @@
 // initdb --data-checksums, or pg_amcheck), so there is no "pages" or "foreign keys" stage.
 #include <cmath>
 #include <cstring>
+#include <map>
 
 #include "pg_connection.h"
 #include "pg_map_store.h"
@@ -97,6 +98,48 @@ class PgChecker {
                " (rows were deleted or added)");
   }
 
+  // Side sessions of a fleet map (schema 11): their own engine state and kd-forest, with each
+  // session's forest row count, as the main line's.
+  void sideSessions() {
+    std::map<std::int64_t, std::string> recorded;
+    rows("session_state", "SELECT session_id, key, value, checksum FROM session_state",
+         [&](const detail::PgResult& r, int i) {
+           const std::string key = r.text(i, 1);
+           const auto [data, size] = r.bytes(i, 2);
+           const std::string row = std::to_string(r.integer(i, 0)) + " '" + key + "'";
+           if (!sumMatches(r, i, 3, detail::stateChecksum(key, data, size)))
+             return find("session_state", row, "fails its checksum");
+           if (key == detail::kKdNodeRowsKey)
+             recorded[r.integer(i, 0)].assign(reinterpret_cast<const char*>(data), size);
+         });
+    std::map<std::int64_t, std::int64_t> counted;
+    rows("session_kd_nodes",
+         "SELECT session_id, tree, node, left_child, right_child, split_dim, split_value, "
+         "checksum FROM session_kd_nodes",
+         [&](const detail::PgResult& r, int i) {
+           ++counted[r.integer(i, 0)];
+           if (!sumMatches(r, i, 7,
+                           detail::kdNodeChecksum(r.integer(i, 1), r.integer(i, 2), r.integer(i, 3),
+                                                  r.integer(i, 4), r.integer(i, 5), r.real(i, 6))))
+             find("session_kd_nodes",
+                  "(session " + std::to_string(r.integer(i, 0)) + ", tree " +
+                      std::to_string(r.integer(i, 1)) + ", node " +
+                      std::to_string(r.integer(i, 2)) + ")",
+                  "fails its checksum");
+         });
+    for (const auto& [session, text] : recorded)
+      if (text != std::to_string(counted[session]))
+        find("session_kd_nodes", "session " + std::to_string(session),
+             "holds " + std::to_string(counted[session]) + " rows where the map recorded " + text);
+    const auto posterior = db_.run(
+        "SELECT session_id, location_id FROM session_posterior WHERE NOT (probability >= 0 AND "
+        "probability <= 1)");
+    for (int i = 0; i < posterior.rows(); ++i)
+      find("session_posterior",
+           std::to_string(posterior.integer(i, 0)) + " " + std::to_string(posterior.integer(i, 1)),
+           "holds a probability outside [0, 1]");
+  }
+
   void values() {
     if (options_.progress) options_.progress({"values", 0, 0});
     const auto weights = db_.run("SELECT id FROM locations WHERE weight < 0");
@@ -130,6 +173,7 @@ CheckReport checkPgMap(const std::string& uri, const CheckOptions& options) {
   db.beginRead();
   try {
     checker.checksums();
+    checker.sideSessions();
     checker.values();
     if (report.ok() && options.last_check) {
       if (options.progress) options.progress({"engine state", 0, 0});

@@ -85,9 +85,7 @@ PgMapStore::PgMapStore(const std::string& uri, OpenMode mode, const OpenOptions&
   }
   // Session-level: held until this connection closes, released by the server if the writer
   // dies, so a killed writer never leaves the map locked.
-  const auto lock =
-      db_->run("SELECT pg_try_advisory_lock($1)", detail::PgParams().add(kWriterLockKey));
-  if (!lock.boolean(0, 0))
+  if (!claimMainLine() && !options.side_writer)
     throw StorageError(ErrorCode::kMapBusy,
                        "map " + label_ + " is busy: another placedb writer has it open");
   // A commit returns before its WAL reaches the disk, as SQLite's synchronous=NORMAL does: a
@@ -105,6 +103,9 @@ void PgMapStore::migrate() {
   const auto& scripts = pgMigrations();
   db_->beginWrite();
   try {
+    // Writers that open a map at once migrate it one after the other; each reads the version
+    // the one before it left.
+    db_->run("SELECT pg_advisory_xact_lock($1)", detail::PgParams().add(kMigrationKey));
     const bool has_meta = db_->queryInt(
                               "SELECT count(*) FROM pg_catalog.pg_tables WHERE schemaname = "
                               "current_schema() AND tablename = 'placedb_meta'") > 0;
@@ -182,6 +183,9 @@ std::int64_t PgMapStore::beginSession(const std::string& source,
                                       const std::map<std::string, std::string>& settings,
                                       const std::string& software_version) {
   auto scope = writeScope();
+  // Ids are max + 1, as a file's rowids: writers beginning at once take turns (the next
+  // statement's snapshot sees the session the one before committed).
+  db_->run("SELECT pg_advisory_xact_lock($1)", detail::PgParams().add(kSessionsKey));
   static const std::string insert =
       std::string(
           "INSERT INTO sessions (id, started_at, software_version, source) VALUES ((SELECT "
@@ -335,6 +339,7 @@ std::optional<FrameRecord> PgMapStore::lastFrame() const {
 // ---- Locations ----
 
 void PgMapStore::insertLocation(const LocationRecord& l) {
+  if (side_session_) return sideInsertLocation(l);
   auto scope = writeScope();
   db_->send(
       "INSERT INTO locations (id, session_id, weight, tier, created_frame) "
@@ -359,6 +364,7 @@ void PgMapStore::updateWeight(std::int64_t location_id, std::int64_t weight) {
 
 void PgMapStore::setTier(const std::vector<std::int64_t>& location_ids, Tier tier) {
   if (location_ids.empty()) return requireWritable();
+  if (side_session_) return sideSetTier(location_ids, tier);
   auto scope = writeScope();
   db_->send("UPDATE locations SET tier = $2 WHERE id = ANY($1)",
             detail::PgParams().addArray(location_ids).add(std::int64_t{static_cast<int>(tier)}));
@@ -405,6 +411,7 @@ std::map<std::int64_t, std::vector<std::int64_t>> PgMapStore::coveredFrames(
 }
 
 std::vector<LocationWeight> PgMapStore::locationsInTier(Tier tier) const {
+  if (side_session_) return sideLocationsInTier(tier);
   const auto r = db_->run("SELECT id, weight FROM locations WHERE tier = $1 ORDER BY id",
                           detail::PgParams().add(std::int64_t{static_cast<int>(tier)}));
   std::vector<LocationWeight> out;

@@ -3,15 +3,19 @@
 // (postgresql://... or postgres://...). The same tables and views as the SQLite map
 // (migrations/pg/), and the same rules (storage/include/placedb/storage/map_store.h), with:
 //
-// - one writer: a read-write open takes the session-level advisory lock kWriterLockKey of the
-//   database for the connection's life (pg_try_advisory_lock); a second writer gets kMapBusy.
-//   A read-only open takes no lock and runs every transaction read-only.
+// - writers: a read-write open takes the main line's advisory lock kWriterLockKey for the
+//   connection's life (pg_try_advisory_lock); when another writer holds it, a second writer gets
+//   kMapBusy, or, with OpenOptions::side_writer, opens for a side session of its own
+//   (pg_map_store_fleet.cpp). A read-only open takes no lock and runs every transaction
+//   read-only.
 // - every statement prepared once per connection, parameters and results in binary, and one
 //   statement per method whatever the number of rows (arrays through unnest, = ANY): a frame's
 //   writes are a fixed number of round trips in one transaction.
 // - ids the database assigns (frames with id 0, sessions, vocabulary imports) are max(id) + 1,
-//   as SQLite's rowids, so a single writer numbers rows exactly as a file does.
+//   as SQLite's rowids, so a single writer numbers rows exactly as a file does; the engine's own
+//   ids come from blocks it reserves (reserveIds).
 #include <memory>
+#include <set>
 #include <string>
 
 #include "pg_connection.h"
@@ -19,8 +23,14 @@
 
 namespace placedb::storage {
 
-// The advisory lock a writer holds: 'PLDB', the application id of every placedb map.
+// The advisory lock the main line's writer holds: 'PLDB', the application id of every placedb
+// map. A writer of a side session holds its session's lock only (pg_map_store_fleet.cpp).
 inline constexpr std::int64_t kWriterLockKey = 0x504C4442;
+// Every writer's lock on its session: (kSessionLockClass, session id), in the two-key space.
+inline constexpr std::int64_t kSessionLockClass = 0x504C4453;  // 'PLDS'
+// Transaction locks: one session is created at a time (ids are max + 1), one migration runs.
+inline constexpr std::int64_t kSessionsKey = 0x504C4443;   // 'PLDC'
+inline constexpr std::int64_t kMigrationKey = 0x504C444D;  // 'PLDM'
 
 class PgMapStore final : public MapStore {
  public:
@@ -156,15 +166,56 @@ class PgMapStore final : public MapStore {
                  const std::function<void(const TableRow&)>& row) const override;
   void writeRows(const TableColumns& t, const std::vector<TableRow>& rows) override;
 
+  // Writers (map_store.h; several at once: storage/src/pg_map_store_fleet.cpp).
+  bool sharedByWriters() const override;
+  bool claimMainLine() override;
+  void releaseMainLine() override;
+  SessionMemory sessionMemory(std::int64_t session_id) const override;
+  void claimSession(std::int64_t session_id) override;
+  void releaseSession(std::int64_t session_id) override;
+  std::int64_t beginSideSession(const std::string& source,
+                                const std::map<std::string, std::string>& settings,
+                                const std::string& software_version) override;
+  void useSideMemory(std::int64_t session_id) override;
+  IdBlock reserveIds(IdKind kind, std::int64_t count, std::int64_t next) override;
+  std::map<std::int64_t, std::int64_t> newestLocations() const override;
+  std::vector<SharedPlace> placesAfter(
+      std::int64_t session_id, const std::map<std::int64_t, std::int64_t>& newest) const override;
+
  private:
   void requireWritable() const;
   detail::WriteScope writeScope();
   std::int64_t storedKdNodeRows() const;
   void migrate();
 
+  // A side session's own memory (pg_map_store_fleet.cpp), used instead of the main line's
+  // tables when side_session_ is set.
+  void sidePutState(const std::string& key, const void* data, std::size_t size);
+  std::optional<std::vector<std::uint8_t>> sideGetState(const std::string& key) const;
+  void sideDeleteState(const std::string& key);
+  void sideWriteKdNodes(const std::vector<KdNodeRecord>& upserts,
+                        const std::vector<std::pair<int, std::int64_t>>& deletions,
+                        bool replace_all);
+  std::vector<KdNodeRecord> sideLoadKdNodes() const;
+  void sidePutPosterior(const std::vector<std::int64_t>& ids,
+                        const std::vector<double>& probabilities);
+  std::vector<std::pair<std::int64_t, double>> sideLoadPosterior() const;
+  void sideInsertLocation(const LocationRecord& location);
+  void sideSetTier(const std::vector<std::int64_t>& ids, Tier tier);
+  std::vector<LocationWeight> sideLocationsInTier(Tier tier) const;
+  void sideSetWmAges(const std::vector<std::int64_t>& ids, const std::vector<std::int64_t>& ages);
+  std::map<std::int64_t, std::int64_t> sideWmAges() const;
+  std::vector<std::int64_t> sideLinkedInTier(std::int64_t location_id, Tier tier,
+                                             std::optional<LinkType> type) const;
+  // A key of engine_state that this writer keeps in its side session's rows.
+  bool sideKey(const std::string& key) const { return side_session_ && isWriterStateKey(key); }
+
   std::string label_;  // the URI without its password
   bool read_only_;
   std::unique_ptr<detail::PgConnection> db_;
+  bool main_line_ = false;          // holds kWriterLockKey
+  std::int64_t side_session_ = 0;   // whose own memory this writer uses; 0: the main line's
+  std::set<std::int64_t> claimed_;  // sessions whose lock this writer holds
 };
 
 std::unique_ptr<MapStore> openPgMapStore(const std::string& uri, OpenMode mode,

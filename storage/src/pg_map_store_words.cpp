@@ -307,6 +307,7 @@ std::int64_t PgMapStore::acceptedClosureCount(bool posed) const {
 
 std::vector<std::int64_t> PgMapStore::linkedInTier(std::int64_t location_id, Tier tier,
                                                    std::optional<LinkType> type) const {
+  if (side_session_) return sideLinkedInTier(location_id, tier, type);
   const auto r = db_->run(
       "SELECT DISTINCT k.other FROM ("
       "  SELECT location_b AS other, type FROM links WHERE location_a = $1"

@@ -111,17 +111,35 @@ TEST_F(PgCli, Lip6DecidesOnAServerAsOnAFileStraightAndResumed) {
   EXPECT_EQ(infoWithoutFile(resumed, dir_)["frames"], 300);
 }
 
-TEST_F(PgCli, SecondWriterExitsFiveAndReadersGoOn) {
+// A fleet map: while one writer holds a session, a second writer of that session exits 5, a
+// writer of a new session begins one of its own (a side session), and readers go on.
+TEST_F(PgCli, SecondWriterOfASessionExitsFiveOthersBeginTheirOwn) {
   const std::string list = lip6List(dir_, "lip6_5.txt", 0, 5);
   if (list.empty()) GTEST_SKIP() << "lip6_outdoor absent under " << datasetsDir();
   const std::string uri = database("");
-  ASSERT_EQ(placedb({"map", uri, list, "-q"}, dir_).exit_code, 0);
-  auto writer = storage::openMapStore(uri, storage::OpenMode::kReadWrite);
-  auto second = placedb({"map", uri, list, "--new-session", "-q"}, dir_);
-  expectCleanError(second, 5, "busy");
+  ASSERT_EQ(placedb({"map", uri, list, "--stop-after", "3", "-q"}, dir_).exit_code, 0);
+  {
+    // Another writer holds the main line and session 1, as a `placedb map` resuming it would.
+    auto writer = storage::openMapStore(uri, storage::OpenMode::kReadWrite);
+    writer->claimSession(1);
+    auto second = placedb({"map", uri, list, "-q"}, dir_);
+    expectCleanError(second, 5, "busy");
+    EXPECT_NE(second.err.find("session 1"), std::string::npos) << second.err;
+    const std::string other = lip6List(dir_, "lip6_5_10.txt", 5, 5);
+    auto own = placedb({"map", uri, other, "-q"}, dir_);
+    EXPECT_EQ(own.exit_code, 0) << describe(own);
+    auto info = placedb({"info", "--json", uri}, dir_);
+    ASSERT_EQ(info.exit_code, 0) << describe(info);
+    const auto json = nlohmann::json::parse(info.out);
+    EXPECT_EQ(json["frames"], 8);
+    EXPECT_EQ(json["sessions"].size(), 2u);
+  }
+  // The writer is gone with its locks: session 1, the newest over its list, resumes where it
+  // stopped.
+  auto resumed = placedb({"map", uri, list, "-q"}, dir_);
+  EXPECT_EQ(resumed.exit_code, 0) << describe(resumed);
   auto info = placedb({"info", uri}, dir_);
-  EXPECT_EQ(info.exit_code, 0) << describe(info);
-  EXPECT_NE(info.out.find("frames 5"), std::string::npos) << info.out;
+  EXPECT_NE(info.out.find("frames 10"), std::string::npos) << info.out;
 }
 
 TEST_F(PgCli, CredentialsNeverShowAndRefusalsHaveTheirCodes) {
@@ -194,8 +212,8 @@ TEST_F(PgCli, LeastPrivilegeRobotMapsAndQueriesWithAPasswordFile) {
   pgAdmin(uri, "GRANT USAGE ON SCHEMA public TO cli_fleet_robot");
   pgAdmin(uri, "GRANT SELECT, INSERT, UPDATE ON ALL TABLES IN SCHEMA public TO cli_fleet_robot");
   pgAdmin(uri,
-          "GRANT DELETE ON engine_state, filter_posterior, kd_nodes, locations, word_refs "
-          "TO cli_fleet_robot");
+          "GRANT DELETE ON engine_state, filter_posterior, kd_nodes, locations, word_refs, "
+          "session_state, session_kd_nodes, session_posterior, session_memory TO cli_fleet_robot");
 
   const std::string host = uri.substr(uri.find("host="), uri.find('&') - uri.find("host="));
   const fs::path pass_file = dir_ / "pgpass";
@@ -208,8 +226,15 @@ TEST_F(PgCli, LeastPrivilegeRobotMapsAndQueriesWithAPasswordFile) {
   ::setenv("PGSSLMODE", "prefer", 1);
   const std::string robot = "postgresql://cli_fleet_robot@/" + db + "?" + host + "&sslmode=disable";
 
-  auto mapped = placedb({"map", robot, list, "--new-session", "-q"}, dir_);
-  EXPECT_EQ(mapped.exit_code, 0) << describe(mapped);
+  {
+    // The owner writes too (it holds the main line): the robot's session is a side session,
+    // whose own memory it rewrites as it maps.
+    auto owner = storage::openMapStore(uri, storage::OpenMode::kReadWrite);
+    auto mapped = placedb({"map", robot, list, "--new-session", "-q"}, dir_);
+    EXPECT_EQ(mapped.exit_code, 0) << describe(mapped);
+    EXPECT_EQ(mapped.err.find("pass-file-secret"), std::string::npos) << mapped.err;
+    EXPECT_EQ(owner->sessionMemory(2), storage::SessionMemory::kOwn);
+  }
   auto query = placedb({"query", robot,
                         dataset("lip6_outdoor").string() + "/images/"
                                                            "outdoor_kennedylong_000006.png"},
@@ -218,7 +243,7 @@ TEST_F(PgCli, LeastPrivilegeRobotMapsAndQueriesWithAPasswordFile) {
   auto info = placedb({"info", robot}, dir_);
   EXPECT_EQ(info.exit_code, 0) << describe(info);
   EXPECT_NE(info.out.find("session 2: 8 frames"), std::string::npos) << info.out;
-  for (const auto& text : {mapped.err, query.out, query.err, info.out})
+  for (const auto& text : {query.out, query.err, info.out})
     EXPECT_EQ(text.find("pass-file-secret"), std::string::npos) << text;
 
   // Without the file, the same URI is refused as credentials (exit 12), in one line.

@@ -200,6 +200,9 @@ void downgradeToSchemaTwo(const std::string& path) {
       "f.stm_size, f.mean_quantisation_error, f.features_ms, f.quantisation_ms, f.likelihood_ms, "
       "f.filter_ms, f.memory_ms, f.storage_ms, f.total_ms FROM frames f");
   exec("CREATE INDEX word_refs_by_word ON word_refs (word_id, location_id)");  // schema 10
+  for (const char* table :
+       {"session_memory", "session_posterior", "session_kd_nodes", "session_state", "id_blocks"})
+    exec(std::string("DROP TABLE ") + table);  // schema 11
   exec("PRAGMA user_version = 2");
   exec("COMMIT");
   sqlite3_close(db);

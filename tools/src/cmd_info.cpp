@@ -109,7 +109,12 @@ nlohmann::json inspectMap(const std::string& path) {
   nlohmann::json sessions = nlohmann::json::array();
   for (const auto& s : store.sessions()) {
     auto last = store.lastFrameIndex(s.id);
+    // Where its memory is (schema/SCHEMA.md, fleet maps): whether it can be resumed.
+    const storage::SessionMemory memory = store.sessionMemory(s.id);
     sessions.push_back({{"id", s.id},
+                        {"memory", memory == storage::SessionMemory::kMainLine ? "main line"
+                                   : memory == storage::SessionMemory::kOwn    ? "own"
+                                                                               : "continued"},
                         {"source", s.source},
                         {"started_at", s.started_at},
                         {"ended_at", s.ended_at ? nlohmann::json(*s.ended_at) : nlohmann::json()},
@@ -159,6 +164,8 @@ std::string describe(const nlohmann::json& info) {
     std::string state = s["clean_close"].get<bool>()
                             ? "closed cleanly"
                             : (s["ended_at"].is_null() ? "open or interrupted" : "ended");
+    // A side session of a fleet map: its memory in rows of its own (a file shows none).
+    if (s["memory"] == "own") state += ", its own memory (a side session)";
     text += fmt::format(
         "session {}: {} frames (last index {}), {}, started {}{}\n  source {}\n",
         s["id"].get<std::int64_t>(), s["frames"].get<std::int64_t>(),

@@ -54,6 +54,9 @@ Command addMapCommand(CLI::App& parent) {
       "reach its end (a crash, Ctrl-C or --stop-after), that session resumes with the first\n"
       "frame not yet processed; otherwise a new session starts. Frame numbers always count from\n"
       "the start of SOURCE. Unreadable images are recorded as bad frames with a warning.\n"
+      "Several `map` runs may write one map on a server at once, each in its own session (a\n"
+      "fleet map: a robot's session resumes as long as no other run writes it, exit 5\n"
+      "otherwise); a lost server is waited for (--server-wait), then exit 13.\n"
       "A session whose SOURCE lists other images than when it began is not resumed (exit 2;\n"
       "--new-session maps it anew).\n\n"
       "Settings: defaults < --preset < --config < --calibration < --set. A resumed session\n"
@@ -107,6 +110,12 @@ Command addMapCommand(CLI::App& parent) {
       ->check(CLI::PositiveNumber);
   app->add_flag("--new-session", request->new_session,
                 "start a new session even if the last one over SOURCE is unfinished");
+  app->add_option("--server-wait", request->server_wait_s,
+                  "a map on a server: when the connection is lost during the run, wait up to "
+                  "this many seconds for the server, then go on where the map stands (default "
+                  "60; 0: at once); after that, exit 13")
+      ->type_name("SECONDS")
+      ->check(CLI::Range(0.0, 86400.0));
   app->add_flag("--quiet,-q", request->quiet, "no progress output");
   return {app, [request, stop_after, app]() {
             if (app->count("--stop-after")) request->stop_after = *stop_after;

@@ -18,8 +18,8 @@ std::string oneLine(std::string text) {
 
 int exitCodeFor(ErrorCode code) {
   int value = static_cast<int>(code);
-  // Codes are published by error.h in 2..12; anything else is a bug reported as internal.
-  if (value < 2 || value > 12) return static_cast<int>(ErrorCode::kInternal);
+  // Codes are published by error.h in 2..13; anything else is a bug reported as internal.
+  if (value < 2 || value > 13) return static_cast<int>(ErrorCode::kInternal);
   return value;
 }
 
@@ -41,6 +41,8 @@ std::string exitCodeTable() {
          "  10  internal error (a bug: please report it)\n"
          "  11  server unreachable: the map's PostgreSQL server cannot be reached or went away\n"
          "  12  server refused the credentials (wrong password, unknown role)\n"
+         "  13  server lost: `map` lost the map's server and it did not come back within\n"
+         "      --server-wait; every committed frame is kept and the next `map` resumes\n"
          "Ctrl-C, SIGTERM or SIGHUP during `map` finishes the current frame, closes the map\n"
          "cleanly (resumable) and exits 0.\n";
 }

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <thread>
 
 #include "exit_codes.h"
 #include "frame_log.h"
@@ -56,6 +57,23 @@ struct ResumeDecision {
   std::optional<ResumePoint> resume;
 };
 
+// The newest session over `source` whose memory the map still keeps: the newest session of the
+// map's main line (on a file, its last session), or a side session of a fleet map, begun while
+// another writer held the map (schema/SCHEMA.md, "Fleet maps").
+std::optional<storage::SessionRecord> sessionOver(const storage::MapStore& store,
+                                                  const ImageSource& source) {
+  const std::vector<storage::SessionRecord> all = store.sessions();
+  for (auto it = all.rbegin(); it != all.rend(); ++it) {
+    if (!sameSource(it->source, source.canonicalPath())) continue;
+    const storage::SessionMemory memory = store.sessionMemory(it->id);
+    if (memory == storage::SessionMemory::kMainLine ||
+        (memory == storage::SessionMemory::kOwn && store.sharedByWriters()))
+      return *it;
+    return std::nullopt;
+  }
+  return std::nullopt;
+}
+
 ResumeDecision sessionToResume(const std::string& map_path, const ImageSource& source,
                                bool new_session) {
   if (new_session) return {};
@@ -63,7 +81,7 @@ ResumeDecision sessionToResume(const std::string& map_path, const ImageSource& s
   try {
     const auto store_owner = storage::openMapStore(map_path, storage::OpenMode::kReadOnly);
     storage::MapStore& store = *store_owner;
-    auto last = store.lastSession();
+    auto last = sessionOver(store, source);
     if (!last) return {};
     auto next = resumeIndex(*last, store.lastFrameIndex(last->id), source);
     if (!next) return {};
@@ -109,12 +127,66 @@ std::string closureLine(const FrameResult& r) {
       r.hypothesis.score, r.hypothesis.inliers, r.hypothesis.pose ? ", pose" : "");
 }
 
-}  // namespace
+// The frame log after a reopen: rows of frames the map does not hold are cut off (they are
+// mapped again), as at a resume.
+std::unique_ptr<FrameLogWriter> reopenLog(const MappingRequest& request, std::int64_t session,
+                                          std::int64_t first_index) {
+  if (request.log_path.empty()) return nullptr;
+  const std::vector<std::int64_t> dropped =
+      FrameLogWriter::cutBack(request.log_path, session, first_index);
+  if (!dropped.empty())
+    printWarning(
+        fmt::format("log {}: dropped the rows of frames {}-{}, which the map lost "
+                    "(they are mapped again)",
+                    request.log_path, dropped.front(), dropped.back()));
+  return std::make_unique<FrameLogWriter>(request.log_path);
+}
 
-MappingSummary runMapping(const MappingRequest& request) {
-  auto started = std::chrono::steady_clock::now();
-  // From here on Ctrl-C only raises a flag: the frame loop below acts on it.
-  installInterruptHandlers();
+// After the connection to a map's server was lost mid-run (a restart, the network): waits up to
+// --server-wait for the server, reopens the map and resumes the session, exactly as a new run
+// would. Throws kServerLost when the time runs out (or Ctrl-C comes first).
+std::pair<std::unique_ptr<Map>, SessionInfo> reopenAfterLoss(const MappingRequest& request,
+                                                             const Options& options,
+                                                             std::int64_t session_id,
+                                                             const Error& cause) {
+  using Clock = std::chrono::steady_clock;
+  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(request.server_wait_s));
+  std::string problem = cause.what();
+  bool busy = false;
+  while (true) {
+    try {
+      auto map = Map::open(request.map_path, options, Map::Mode::kMapping);
+      SessionInfo info = map->resumeSession(session_id);
+      return {std::move(map), std::move(info)};
+    } catch (const Error& e) {
+      // The server is still away, or still holds this writer's old connection (and with it the
+      // session) until it notices that the connection is gone.
+      if (e.code() != ErrorCode::kServerUnreachable && e.code() != ErrorCode::kMapBusy) throw;
+      problem = e.what();
+      busy = e.code() == ErrorCode::kMapBusy;
+    }
+    const auto left = deadline - Clock::now();
+    if (left <= Clock::duration::zero() || interruptRequested()) break;
+    std::this_thread::sleep_for(std::min<Clock::duration>(left, std::chrono::milliseconds(500)));
+  }
+  if (busy) throw Error(ErrorCode::kMapBusy, problem);
+  throw Error(
+      ErrorCode::kServerLost,
+      fmt::format("{}: lost its server and could not reach it again within {} s "
+                  "(--server-wait): {}; every committed frame is kept, run `placedb "
+                  "map` again to resume",
+                  storage::mapDisplayName(request.map_path), request.server_wait_s, problem));
+}
+
+// The server of the map went away while the run opened the map, after it had answered.
+struct OpeningLost {
+  std::string problem;
+};
+
+// One attempt at the whole run; `reached` when an earlier attempt reached the server.
+MappingSummary runOnce(const MappingRequest& request, std::chrono::steady_clock::time_point started,
+                       bool reached) {
   // Everything that can be refused is checked before the map file is touched.
   auto source = ImageSource::open(request.source, request.source_options);
   Options options = resolveOptions(request.settings);
@@ -140,19 +212,29 @@ MappingSummary runMapping(const MappingRequest& request) {
     printWarning(fmt::format("skipping {}: not an image file", skipped));
   std::unique_ptr<FrameLogWriter> log;
 
-  auto map = Map::open(request.map_path, options, Map::Mode::kMapping);
+  std::unique_ptr<Map> map;
   MappingSummary summary;
-  if (!decision.known && !request.new_session) {
-    resume = sessionToResume(*map, *source);
-    checkLog();
-  }
-  if (resume) {
-    summary.first_index = resume->first_index;
-    summary.session_id = map->resumeSession(resume->session_id).id;
-    summary.resumed = true;
-    source->seek(summary.first_index);
-  } else {
-    summary.session_id = map->beginSession(source->canonicalPath(), source->digest()).id;
+  try {
+    map = Map::open(request.map_path, options, Map::Mode::kMapping);
+    if (!decision.known && !request.new_session) {
+      resume = sessionToResume(*map, *source);
+      checkLog();
+    }
+    if (resume) {
+      summary.first_index = resume->first_index;
+      summary.session_id = map->resumeSession(resume->session_id).id;
+      summary.resumed = true;
+      source->seek(summary.first_index);
+    } else {
+      summary.session_id = map->beginSession(source->canonicalPath(), source->digest()).id;
+    }
+  } catch (const Error& e) {
+    // The look above reached the server (or an earlier attempt did), so it went away since: a
+    // restart, the network. Nothing of this run was logged yet: runMapping starts it again.
+    if (e.code() == ErrorCode::kServerUnreachable && storage::isServerMap(request.map_path) &&
+        (decision.known || reached))
+      throw OpeningLost{e.what()};
+    throw;
   }
   if (!request.log_path.empty()) {
     if (resume) {
@@ -198,15 +280,44 @@ MappingSummary runMapping(const MappingRequest& request) {
       break;
     }
     FrameResult result;
-    if (frame.image.empty()) {
+    try {
+      if (frame.image.empty()) {
+        if (progress) progress->clearLine();
+        printWarning(fmt::format("frame {} ({}): {}; recorded as a bad frame", frame.index,
+                                 frame.path, frame.problem));
+        result = map->recordUnreadable(frame.index, frame.path, frame.stamp_ns);
+      } else {
+        result = map->process(frame.image, frame.index, frame.path, frame.stamp_ns);
+      }
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::kServerUnreachable || !storage::isServerMap(request.map_path))
+        throw;
       if (progress) progress->clearLine();
-      printWarning(fmt::format("frame {} ({}): {}; recorded as a bad frame", frame.index,
-                               frame.path, frame.problem));
-      result = map->recordUnreadable(frame.index, frame.path, frame.stamp_ns);
-      ++summary.unreadable;
-    } else {
-      result = map->process(frame.image, frame.index, frame.path, frame.stamp_ns);
+      printWarning(fmt::format("lost the server at frame {}: {}; waiting up to {} s for it",
+                               frame.index, e.what(), request.server_wait_s));
+      log.reset();
+      map.reset();  // closing fails quietly: the session stays open for the resume
+      auto reopened = reopenAfterLoss(request, options, summary.session_id, e);
+      map = std::move(reopened.first);
+      const auto& last = reopened.second.last_source_index;
+      const std::int64_t next = last ? *last + 1 : 0;
+      if (next > frame.index) {
+        // The server committed the frame as the connection went: the map has it, its row
+        // never reached the log.
+        ++summary.processed;
+        if (!request.log_path.empty())
+          printWarning(
+              fmt::format("log {}: no row for frame {}, which the server committed as "
+                          "the connection was lost",
+                          request.log_path, frame.index));
+      }
+      if (source->kind() != "live") source->seek(next);
+      log = reopenLog(request, summary.session_id, next);
+      printNote(fmt::format("the server is back: session {} goes on from frame {}",
+                            summary.session_id, next));
+      continue;
     }
+    if (frame.image.empty()) ++summary.unreadable;
     ++summary.processed;
     if (result.outcome == FrameOutcome::kNewLocation) ++summary.locations_created;
     if (result.outcome == FrameOutcome::kBad) ++summary.bad;
@@ -225,11 +336,50 @@ MappingSummary runMapping(const MappingRequest& request) {
                         source->size()});
   }
   summary.dropped = source->dropped();
-  map->close();
+  try {
+    map->close();
+  } catch (const Error& e) {
+    // Every frame is committed; only the session's clean close is left, once the server is back.
+    if (e.code() != ErrorCode::kServerUnreachable || !storage::isServerMap(request.map_path)) throw;
+    map.reset();
+    reopenAfterLoss(request, options, summary.session_id, e).first->close();
+  }
   if (progress) progress->finish();
   summary.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   return summary;
+}
+
+}  // namespace
+
+MappingSummary runMapping(const MappingRequest& request) {
+  using Clock = std::chrono::steady_clock;
+  const auto started = Clock::now();
+  // From here on Ctrl-C only raises a flag: the frame loop acts on it.
+  installInterruptHandlers();
+  std::optional<Clock::time_point> deadline;
+  while (true) {
+    try {
+      return runOnce(request, started, deadline.has_value());
+    } catch (const OpeningLost& lost) {
+      if (!deadline) {
+        deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                      std::chrono::duration<double>(request.server_wait_s));
+        printWarning(
+            fmt::format("lost the server while opening the map: {}; waiting up to {} "
+                        "s for it",
+                        lost.problem, request.server_wait_s));
+      }
+      if (Clock::now() >= *deadline || interruptRequested())
+        throw Error(ErrorCode::kServerLost,
+                    fmt::format("{}: lost its server and could not reach it again within {} s "
+                                "(--server-wait): {}; every committed frame is kept, run "
+                                "`placedb map` again to resume",
+                                storage::mapDisplayName(request.map_path), request.server_wait_s,
+                                lost.problem));
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    }
+  }
 }
 
 }  // namespace placedb::cli

@@ -5,7 +5,13 @@
 // Resume rule: when the map's last session ran over the same source (canonical absolute paths)
 // and either was interrupted (not closed cleanly) or stopped before the source's end (a clean
 // close after --stop-after or Ctrl-C), that session continues with the first frame not yet
-// processed; otherwise a new session begins. --new-session forces a new one.
+// processed; otherwise a new session begins. --new-session forces a new one. On a fleet map
+// (a server map with several writers) the session is the newest over the same source whose
+// memory the map keeps: the main line's newest, or a side session of its own.
+//
+// A map on a server whose connection is lost mid-run (a server restart, the network): the run
+// waits up to server_wait_s for it, reopens the map and resumes the session as a new run would,
+// from the first frame the map does not hold; then kServerLost.
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -24,6 +30,9 @@ struct MappingRequest {
   std::optional<std::int64_t> stop_after;
   bool new_session = false;
   bool quiet = false;  // no progress output, no line per accepted loop closure
+  // A map on a server: how long to wait for the server when the connection is lost during the
+  // run, before exiting with kServerLost (13). 0: at once.
+  double server_wait_s = 60;
 };
 
 struct MappingSummary {

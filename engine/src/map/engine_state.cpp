@@ -38,6 +38,13 @@ void EngineCounters::save(storage::MapStore& store) const {
                       {"evidence_log10_alternatives", closure_evidence.log10_alternatives},
                       {"evidence_frames", closure_evidence.frames},
                       {"next_wm_age", next_wm_age}};
+  // Only where a server map's writer set them: a file's counters stay as they were.
+  const std::pair<const char*, std::int64_t> fleet[] = {{"frame_block_end", frame_block_end},
+                                                        {"location_block_end", location_block_end},
+                                                        {"word_block_end", word_block_end},
+                                                        {"frame_clock_shift", frame_clock_shift}};
+  for (const auto& [key, value] : fleet)
+    if (value != 0) j[key] = value;
   store.putState(kCountersKey, j.dump());
 }
 
@@ -70,6 +77,11 @@ bool EngineCounters::load(const storage::MapStore& store) {
     closure_evidence.frames = j.value("evidence_frames", 0);
     // Absent from maps made before schema 4, whose ages were the location ids.
     next_wm_age = j.value("next_wm_age", next_location_id);
+    // Absent where no block was reserved (every file, and maps before schema 11).
+    frame_block_end = j.value("frame_block_end", std::int64_t{0});
+    location_block_end = j.value("location_block_end", std::int64_t{0});
+    word_block_end = j.value("word_block_end", std::int64_t{0});
+    frame_clock_shift = j.value("frame_clock_shift", std::int64_t{0});
   } catch (const nlohmann::json::exception& e) {
     throw Error(ErrorCode::kMapRefused, fmt::format("{}: engine state '{}' is damaged: {}",
                                                     store.path(), kCountersKey, e.what()));
@@ -84,6 +96,11 @@ bool EngineCounters::load(const storage::MapStore& store) {
   require(next_frame_id >= 1, "next_frame_id", next_frame_id, "at least 1");
   require(next_location_id >= 1, "next_location_id", next_location_id, "at least 1");
   require(next_wm_age >= 1, "next_wm_age", next_wm_age, "at least 1");
+  require(frame_block_end == 0 || frame_block_end >= next_frame_id, "frame_block_end",
+          frame_block_end, "0 or at least next_frame_id");
+  require(location_block_end == 0 || location_block_end >= next_location_id, "location_block_end",
+          location_block_end, "0 or at least next_location_id");
+  require(word_block_end >= 0, "word_block_end", word_block_end, "not negative");
   require(feature_sum >= 0, "feature_sum", feature_sum, "not negative");
   require(feature_frames >= 0, "feature_frames", feature_frames, "not negative");
   require(last_location >= 0 && last_location < next_location_id, "last_location", last_location,

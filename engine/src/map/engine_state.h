@@ -23,6 +23,16 @@ struct EngineCounters {
   ClosureRun closure_run;            // the loop closures a revisit is making
   ClosureEvidence closure_evidence;  // the check's evidence over the newest frames
   std::int64_t next_wm_age = 1;      // the memory tiers' age clock (next_location_id on older maps)
+  // Where the blocks of ids this writer reserved end (map_fleet.cpp), 0: no block. A file's
+  // writer hands ids out without one; a writer of a server map reserves blocks, since other
+  // writers may hand out ids at the same time.
+  std::int64_t frame_block_end = 0;
+  std::int64_t location_block_end = 0;
+  std::int64_t word_block_end = 0;
+  // The frame ids this session skipped to reach its blocks: closure runs and evidence count
+  // frames by their clock, frame id - frame_clock_shift, which a jump to a new block leaves
+  // continuous. 0 for a lone writer, whose blocks follow each other.
+  std::int64_t frame_clock_shift = 0;
 
   void save(storage::MapStore& store) const;
   // False when the map holds no engine state yet (a new map).

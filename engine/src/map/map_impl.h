@@ -2,6 +2,7 @@
 // The engine behind placedb::Map: the per-frame pipeline over the storage, vocabulary, memory
 // tiers and Bayes filter. One MapImpl owns one open map file.
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -96,6 +97,9 @@ class MapImpl final : public Map {
                     FrameResult& result);
   FrameResult recordBad(std::int64_t source_index, const std::string& source_path,
                         std::size_t feature_count, const StageTimes& times);
+  // Runs one frame; when it fails after reserving ids, their transaction rolls back and the map
+  // must be reopened (broken_).
+  FrameResult abandonOnError(const std::function<FrameResult()>& frame);
   // Picks the reported hypothesis among the filter's best and its WM neighbours and verifies
   // it; fills result.hypothesis (location, posterior, score, acceptance, reason).
   struct Verified {
@@ -146,6 +150,28 @@ class MapImpl final : public Map {
   void leaveIndex(const WordChanges& changes);  // unreferenced words leave, imported ones stay
   void commit(FrameWrite& write, FrameResult& result, const std::string& source_path);
   std::vector<FrameRef> framesOf(std::int64_t location_id) const;
+
+  // Fleet maps (map_fleet.cpp): several writers of one map on a server, each in its own session.
+  // Begins a session that keeps its own memory, a copy of the main line's (another writer holds
+  // the main line).
+  SessionInfo beginSideSession(const std::string& source, const std::string& source_digest);
+  // What beginSession does to the memory it starts from: the previous session's STM becomes
+  // loop candidates and its newest location is no longer this one's.
+  void startSessionMemory(std::int64_t session_id);
+  // Ids for the frame about to be processed, which may create `words` words: reserves blocks
+  // in the frame's transaction (opened here) where the writer's run out.
+  void reserveIds(std::int64_t words);
+  // A frame's place in its session's order, for closure runs and evidence (engine_state.h).
+  std::int64_t frameClock(std::int64_t frame_id) const {
+    return frame_id - counters_.frame_clock_shift;
+  }
+  // Adds the places other writers stored since the last look to long-term memory, where the LTM
+  // search and retrieval find them.
+  void learnOtherWritersPlaces();
+  // After the vocabulary took in words of other writers, its next word id back in this
+  // writer's block.
+  void keepWordIdsInBlock(std::int64_t next_word_id);
+  SessionInfo sessionInfo(std::int64_t session_id) const;
   // Localisation: makes the vocabulary complete (the words of LTM locations too) and indexes
   // the LTM signatures, once, when the map's words fit the budget; else leaves LTM to the codes.
   void loadLtmWords();
@@ -176,6 +202,13 @@ class MapImpl final : public Map {
   VocabularyStateWriter vocabulary_state_;
   std::vector<std::int64_t> imported_words_;  // ascending; never leave the index
   std::optional<std::int64_t> session_id_;
+  // Fleet maps: the frame's transaction, opened before processing when it reserves ids; the
+  // newest location of every session this writer knows; whether RAM holds the main line's memory
+  // as read while this writer held the main line (not a side session's, nor a copy read while
+  // another writer held it).
+  std::optional<storage::Transaction> frame_tx_;
+  std::map<std::int64_t, std::int64_t> newest_known_;
+  bool main_memory_ = false;
   std::map<std::int64_t, CameraIntrinsics> session_intrinsics_;  // other sessions', as read
   bool closed_ = false;
   bool broken_ = false;  // a failed commit left RAM ahead of the file: reopen to continue

@@ -36,6 +36,10 @@ std::size_t MapImpl::importVocabulary(const std::string& file, bool text, Vocabu
   if (session_id_)
     throw Error(ErrorCode::kInvalidArgument,
                 fmt::format("{}: a vocabulary is imported before any session", store_->path()));
+  // The vocabulary becomes the main line's memory: no other writer may be starting the map.
+  if (!store_->claimMainLine())
+    throw Error(ErrorCode::kMapBusy,
+                fmt::format("{} is busy: another placedb writer has it open", store_->path()));
   const std::int64_t frames = store_->frameCount(), words = store_->wordCount();
   if (frames > 0 || words > 0)
     throw Error(ErrorCode::kInvalidArgument,

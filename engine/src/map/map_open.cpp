@@ -32,8 +32,15 @@ std::unique_ptr<Map> Map::open(const std::string& path, const Options& options, 
 }
 
 MapImpl::MapImpl(const std::string& path, const Options& options, Mode mode) : mode_(mode) {
-  store_ = storage::openMapStore(path, mode == Mode::kLocalisation ? storage::OpenMode::kReadOnly
-                                                                   : storage::OpenMode::kReadWrite);
+  storage::OpenOptions open_options;
+  open_options.side_writer = true;  // a server map may have other writers (map_fleet.cpp)
+  store_ = storage::openMapStore(
+      path,
+      mode == Mode::kLocalisation ? storage::OpenMode::kReadOnly : storage::OpenMode::kReadWrite,
+      open_options);
+  // Taken before the memory is read, so that what is read is the main line's as its writer
+  // continues it; without it the memory is only the copy a side session would start from.
+  main_memory_ = mode == Mode::kMapping && store_->claimMainLine();
   configure(options);
   restoreFromStore();
 }
@@ -73,6 +80,9 @@ void MapImpl::restoreFromStore() {
   const auto snapshot_of_file = store_->readSnapshot();
   counters_ = EngineCounters();
   counters_.load(*store_);
+  // Before the locations are listed: a place stored in between is found again, not missed.
+  newest_known_.clear();
+  if (store_->sharedByWriters()) newest_known_ = store_->newestLocations();
 
   // Tiers, with their ages in the transfer order (the location id on maps before schema 4).
   MemorySnapshot snapshot;
@@ -86,8 +96,11 @@ void MapImpl::restoreFromStore() {
                     fmt::format("{}: locations row {} is damaged: weight {} is negative",
                                 store_->path(), row.id, row.weight));
       const auto age = ages.find(row.id);
-      snapshot.locations.push_back(
-          {row.id, tier, row.weight, age == ages.end() ? row.id : age->second});
+      std::int64_t entered = age == ages.end() ? row.id : age->second;
+      // A location in LTM gets a new age when it comes back, so its own is never used; places
+      // other writers stored have none in this writer's order (map_fleet.cpp).
+      if (tier == Tier::kLtm) entered = std::min(entered, snapshot.next_age - 1);
+      snapshot.locations.push_back({row.id, tier, row.weight, entered});
       if (tier == Tier::kStm) snapshot.stm.push_back(row.id);
       if (tier != Tier::kLtm) live.push_back(row.id);
     }
@@ -123,8 +136,15 @@ void MapImpl::restoreFromStore() {
                                            word_ids.begin() + std::ptrdiff_t(begin + count));
       store_->loadFloatDescriptors(span, dim, rows, created);
     };
+    // On a fleet map this writer's working memory may hold words other writers created, with
+    // ids past its own next one (map_fleet.cpp); elsewhere such a word means damage.
+    const std::int64_t next_word_id = state->next_word_id;
+    const bool shared_ids = store_->sharedByWriters() || counters_.word_block_end != 0;
+    if (shared_ids && !word_ids.empty() && word_ids.back() >= next_word_id)
+      state->next_word_id = word_ids.back() + 1;
     try {
       vocabulary_->restore(*state, word_ids, load);
+      if (shared_ids) vocabulary_->continueAt(next_word_id);
     } catch (const Error& e) {
       // The state came from the file: if it does not fit, the file is damaged, not the caller.
       if (e.code() != ErrorCode::kInvalidArgument) throw;
@@ -224,48 +244,65 @@ SessionInfo MapImpl::beginSession(const std::string& source, const std::string& 
   requireWritable("beginSession");
   if (session_id_) close();
   closed_ = false;
-  // A new session's locations never merge with, nor link to, the previous session's newest one;
-  // the previous session's STM becomes loop candidates.
+  // Another writer continues the main line: this one starts from a copy (map_fleet.cpp).
+  if (!store_->claimMainLine()) return beginSideSession(source, source_digest);
+  if (!main_memory_) {
+    configure(options_);
+    restoreFromStore();
+    main_memory_ = true;
+  }
   auto tx = store_->begin();
   std::int64_t id = store_->beginSession(source, options_.toSettings(), PLACEDB_VERSION_STRING);
+  store_->claimSession(id);
   if (!source_digest.empty()) store_->setSourceDigest(id, source_digest);
   if (!store_->getStateText(kMapExtractorKey))
     store_->putState(kMapExtractorKey, extractor_->signature());
-  std::vector<std::int64_t> stm(tiers_->stm().begin(), tiers_->stm().end());
-  if (!stm.empty()) {
-    MemorySnapshot snap = tiers_->snapshot();
-    for (auto& r : snap.locations)
-      if (r.tier == Tier::kStm) r.tier = Tier::kWm;
-    snap.stm.clear();
-    tiers_->restore(snap);
-    store_->setTier(stm, storage::Tier::kWm);
-  }
-  counters_.last_location = 0;
-  counters_.last_session = id;
+  startSessionMemory(id);
   counters_.save(*store_);
   tx.commit();
   session_id_ = id;
-  return toInfo(*store_->lastSession());
+  return sessionInfo(id);
 }
 
 SessionInfo MapImpl::resumeSession(std::int64_t session_id) {
   requireWritable("resumeSession");
   if (session_id_) close();
   closed_ = false;
-  auto last = store_->lastSession();
-  if (!last || last->id != session_id)
+  const storage::SessionMemory memory = store_->sessionMemory(session_id);
+  if (memory == storage::SessionMemory::kGone) {
+    auto last = store_->lastSession();
     throw Error(ErrorCode::kInvalidArgument,
-                fmt::format("{}: only the last session can be resumed (asked {}, last is {})",
+                fmt::format("{}: only the last session can be resumed (asked {}, last is {}; on "
+                            "a map on a server, also a session of its own, begun while another "
+                            "writer held the map)",
                             store_->path(), session_id, last ? last->id : 0));
+  }
   // The session continues with the settings it started with, so its results stay exact.
   Options stored = Options::fromStoredSettings(store_->settings(session_id));
-  if (stored.toSettings() != options_.toSettings()) {
+  if (memory == storage::SessionMemory::kMainLine) {
+    if (!store_->claimMainLine())
+      throw Error(ErrorCode::kMapBusy,
+                  fmt::format("{} is busy: session {} continues the map's main line, which "
+                              "another placedb writer holds",
+                              store_->path(), session_id));
+    store_->claimSession(session_id);
+    if (!main_memory_ || stored.toSettings() != options_.toSettings()) {
+      configure(stored);
+      restoreFromStore();
+      main_memory_ = true;
+    }
+  } else {
+    // A side session of a fleet map: its own memory (a file refuses it here).
+    store_->claimSession(session_id);
+    store_->useSideMemory(session_id);
+    store_->releaseMainLine();  // for another writer to continue
+    main_memory_ = false;
     configure(stored);
     restoreFromStore();
   }
   store_->reopenSession(session_id);
   session_id_ = session_id;
-  return toInfo(*store_->lastSession());
+  return sessionInfo(session_id);
 }
 
 void MapImpl::close() {
@@ -274,6 +311,7 @@ void MapImpl::close() {
     return;
   }
   store_->endSession(*session_id_, true);
+  store_->releaseSession(*session_id_);
   closed_ = true;
   session_id_.reset();
 }
@@ -299,11 +337,14 @@ std::string MapImpl::checkConsistency() const {
   if (std::vector<std::int64_t>(words.begin(), words.end()) != in_vocabulary)
     return fmt::format("vocabulary holds {} words, STM+WM (and imports) reference {}",
                        in_vocabulary.size(), words.size());
-  // The file agrees with RAM on every tier.
+  // The file agrees with RAM on every tier (this writer's own tiers, on a fleet map).
+  std::map<std::int64_t, Tier> stored_tier;
+  for (Tier tier : {Tier::kStm, Tier::kWm})
+    for (const auto& row : store_->locationsInTier(tier)) stored_tier[row.id] = tier;
   for (std::int64_t id : live) {
-    auto stored = store_->location(id);
-    if (!stored) return fmt::format("location {} is not in the file", id);
-    if (stored->tier != tiers_->tierOf(id))
+    if (!store_->location(id)) return fmt::format("location {} is not in the file", id);
+    const auto stored = stored_tier.find(id);
+    if (stored == stored_tier.end() || stored->second != tiers_->tierOf(id))
       return fmt::format("location {} has another tier on file", id);
   }
   return {};

@@ -39,6 +39,10 @@ struct MapImpl::FrameWrite {
   std::optional<std::vector<std::int8_t>> place_code;       // the new location's
   std::vector<std::uint8_t> place_coder;                    // the centres, once per map
   std::vector<std::pair<std::int64_t, std::int64_t>> ages;  // locations entering STM/WM
+  // The hypothesis whose frames the result names, read in the frame's transaction: once the
+  // commit returns, the frame needs nothing more from the map, so a lost connection or a kill
+  // after it cannot separate a committed frame from its result.
+  std::optional<std::int64_t> frames_of;
 };
 
 FrameResult MapImpl::process(const cv::Mat& image, std::int64_t source_index,
@@ -53,21 +57,37 @@ FrameResult MapImpl::process(const cv::Mat& image, std::int64_t source_index,
     if (e.code() != ErrorCode::kInvalidArgument) throw;
     StageTimes times;
     times.features = times.total = msSince(start);
-    return recordBad(source_index, source_path, 0, times);  // empty or tiny: nothing to see
+    return abandonOnError(
+        [&] { return recordBad(source_index, source_path, 0, times); });  // nothing to see
   }
   Features features = extractor_->extract(grey);
-  return processFeatures(features, source_index, source_path, msSince(start));
+  return abandonOnError(
+      [&] { return processFeatures(features, source_index, source_path, msSince(start)); });
 }
 
 FrameResult MapImpl::recordUnreadable(std::int64_t source_index, const std::string& source_path,
                                       std::optional<std::int64_t> stamp_ns) {
   requireSession("recordUnreadable");
   frame_stamp_ns_ = stamp_ns;
-  return recordBad(source_index, source_path, 0, StageTimes());
+  return abandonOnError([&] { return recordBad(source_index, source_path, 0, StageTimes()); });
+}
+
+FrameResult MapImpl::abandonOnError(const std::function<FrameResult()>& frame) {
+  try {
+    return frame();
+  } catch (...) {
+    // Ids reserved for the frame (map_fleet.cpp) went back with its transaction: RAM is ahead.
+    if (frame_tx_) {
+      frame_tx_.reset();
+      broken_ = true;
+    }
+    throw;
+  }
 }
 
 FrameResult MapImpl::recordBad(std::int64_t source_index, const std::string& source_path,
                                std::size_t feature_count, const StageTimes& times) {
+  reserveIds(0);
   FrameResult r;
   r.frame_id = counters_.next_frame_id++;
   r.session_id = *session_id_;
@@ -95,6 +115,8 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
     times.total = msSince(start);
     return recordBad(source_index, source_path, features.size(), times);
   }
+  reserveIds(vocabulary_->options().fixed ? 0 : static_cast<std::int64_t>(features.size()));
+  learnOtherWritersPlaces();
   counters_.feature_sum += static_cast<std::int64_t>(features.size());
   counters_.feature_frames += 1;
 
@@ -137,8 +159,8 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
   times.memory = search_ms + msSince(stage);
 
   r.times = times;
+  if (hypothesis != kNewPlace) w.frames_of = hypothesis;
   commit(w, r, source_path);
-  if (hypothesis != kNewPlace) r.hypothesis.frames = framesOf(hypothesis);
   return r;
 }
 
@@ -216,7 +238,7 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
   // geometric check.
   const auto verify_start = Clock::now();
   const Verified verified =
-      verifyHypothesis(outcome, features, q.word_of_feature, similarities, r.frame_id);
+      verifyHypothesis(outcome, features, q.word_of_feature, similarities, frameClock(r.frame_id));
   // Measuring the pose is part of verification; it never changes the decision.
   std::optional<storage::ClosurePose> pose;
   if (options_.hasIntrinsics() && verified.location != kNewPlace && outcome.accepted &&
@@ -271,8 +293,8 @@ void MapImpl::acceptLoopClosure(std::int64_t hypothesis, const Verified& verifie
   // Only a closure that passed on its own anchors the next ones: chains of temporal
   // acceptances would drift along the graph while the camera moves on.
   if (!verified.temporal)
-    counters_.closure_run = anchorAt(counters_.closure_run, hypothesis, r.frame_id, r.session_id,
-                                     verified.continues_run, toRunSettings(options_));
+    counters_.closure_run = anchorAt(counters_.closure_run, hypothesis, frameClock(r.frame_id),
+                                     r.session_id, verified.continues_run, toRunSettings(options_));
   if (hypothesis != r.location_id) {
     w.links.push_back(
         link(r.location_id, hypothesis, storage::LinkType::kLoopClosure, r.hypothesis.score));
@@ -363,7 +385,9 @@ void MapImpl::restoreWords(std::vector<std::int64_t> missing) {
   std::vector<std::int64_t> created(missing.size());
   store_->loadFloatDescriptors(missing, vocabulary_->dim(), descriptors.ptr<float>(),
                                created.data());
+  const std::int64_t next_word_id = vocabulary_->nextWordId();
   vocabulary_->insert(missing, descriptors, created);
+  keepWordIdsInBlock(next_word_id);  // words of other writers may have larger ids
 }
 
 void MapImpl::bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write,
@@ -454,7 +478,9 @@ void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_pa
       static_cast<std::int64_t>(r.vocabulary_size), static_cast<std::int64_t>(r.wm_size),
       static_cast<std::int64_t>(r.stm_size),        r.mean_quantisation_error};
   try {
-    auto tx = store_->begin();
+    // Open already when the frame reserved ids (map_fleet.cpp).
+    storage::Transaction tx = frame_tx_ ? std::move(*frame_tx_) : store_->begin();
+    frame_tx_.reset();
     if (!w.words.empty()) store_->insertWords(w.words);
     if (w.new_location) {
       store_->insertLocation(*w.new_location);
@@ -491,6 +517,7 @@ void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_pa
         storage_ms,
         t.features + t.quantisation + t.likelihood + t.filter + t.memory + storage_ms};
     store_->insertFrame(w.frame);
+    if (w.frames_of) r.hypothesis.frames = framesOf(*w.frames_of);
     tx.commit();
   } catch (...) {
     broken_ = true;  // RAM is one frame ahead of the file now

@@ -2,6 +2,7 @@
 set(_placedb_map_sources
   ${CMAKE_CURRENT_LIST_DIR}/engine_state.cpp
   ${CMAKE_CURRENT_LIST_DIR}/option_mapping.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/map_fleet.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_import.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_open.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_process.cpp

@@ -188,6 +188,11 @@ void Vocabulary::insert(const std::vector<std::int64_t>& ids, const cv::Mat& des
   }
 }
 
+void Vocabulary::continueAt(std::int64_t next_word_id) {
+  require(next_word_id >= 0, "continueAt: negative word id " + std::to_string(next_word_id));
+  next_word_id_ = next_word_id;
+}
+
 void Vocabulary::erase(const std::vector<std::int64_t>& ids) {
   for (std::int64_t id : ids) {
     require(contains(id), "erase: word " + std::to_string(id) + " is not in RAM");

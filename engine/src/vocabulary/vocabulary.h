@@ -113,6 +113,12 @@ class Vocabulary {
   bool contains(std::int64_t id) const { return id >= 0 && slot_of_.find(id) != IdTable::kNone; }
   std::size_t size() const { return slot_of_.size(); }
   std::int64_t nextWordId() const { return next_word_id_; }
+  // The next word created gets `next_word_id`, even below a word in RAM: for a map whose writers
+  // each create words from blocks of ids of their own, where words brought back from another
+  // writer may have larger ids than this one's next (insert() and restore() would otherwise take
+  // the next id past them, into the other writer's block). The caller vouches that none of the
+  // ids it will create this way is in RAM.
+  void continueAt(std::int64_t next_word_id);
   const float* descriptor(std::int64_t id) const;    // nullptr if not in RAM
   std::int64_t createdFrame(std::int64_t id) const;  // -1 if not in RAM
   std::vector<std::int64_t> ids() const;             // ascending

@@ -18,6 +18,7 @@ enum class ErrorCode : int {
   kInternal = 10,           // a broken invariant: a bug
   kServerUnreachable = 11,  // the map's database server cannot be reached (or went away)
   kAuthRefused = 12,        // the map's database server refused the credentials
+  kServerLost = 13,         // a writer lost the map's server and it did not come back in time
 };
 
 class Error : public std::runtime_error {

@@ -40,7 +40,42 @@ struct OpenOptions {
   std::int64_t integrity_check_max_bytes = std::int64_t{256} << 20;
   // PostgreSQL: how long connecting may take before kServerUnreachable.
   int connect_timeout_s = 10;
+  // PostgreSQL: a read-write open when another writer holds the map's main line opens anyway,
+  // for a session of its own (MapStore::beginSideSession), instead of kMapBusy. The engine sets
+  // it; a tool that needs the map to itself (copy, vocabulary import) does not.
+  bool side_writer = false;
 };
+
+// ---- Fleet maps: several writers at once (schema/SCHEMA.md, "Fleet maps") ----
+
+// The ids a writer hands out: frames, locations and words.
+enum class IdKind { kFrame, kLocation, kWord };
+
+// A block of ids reserved by one writer: [first, end).
+struct IdBlock {
+  std::int64_t first = 0;
+  std::int64_t end = 0;
+};
+
+// Where a session's memory (its engine state, tiers, filter, kd-forest) is kept, which decides
+// whether it can be resumed: on the main line (the map-wide tables, continued by one writer at a
+// time: only its newest session resumes), in rows of its own (a side session of a fleet map), or
+// nowhere any more (a later session continued the main line).
+enum class SessionMemory { kGone, kMainLine, kOwn };
+
+// A place another writer stored: its location, session, weight and place code (empty when the
+// location predates place codes).
+struct SharedPlace {
+  std::int64_t location_id = 0;
+  std::int64_t session_id = 0;
+  std::int64_t weight = 0;
+  std::vector<std::int8_t> code;
+};
+
+// True for the keys of engine_state that hold a writer's own memory ("engine.counters",
+// "vocabulary.header", "storage.kd_nodes.rows"): a side session keeps its own.
+bool isWriterStateKey(const std::string& key);
+const std::vector<std::string>& writerStateKeys();
 
 // True when `map` names a map on a PostgreSQL server (a libpq URI: postgresql:// or
 // postgres://) rather than a file.
@@ -267,6 +302,43 @@ class MapStore {
   virtual void readTable(const TableColumns& t,
                          const std::function<void(const TableRow&)>& row) const = 0;
   virtual void writeRows(const TableColumns& t, const std::vector<TableRow>& rows) = 0;
+
+  // ---- Writers (schema/SCHEMA.md, "Fleet maps") ----
+  // A file has one writer: it holds the main line (the memory in the map-wide tables) and hands
+  // out ids from its own counters. A map on a server may have several writers at once, each in
+  // its own session: one continues the main line, the others keep their memory in rows of their
+  // own (side sessions), and all take their ids from blocks reserved in id_blocks.
+
+  // True when other writers may write this map while this one does (a map on a server).
+  virtual bool sharedByWriters() const = 0;
+  // Takes the main line if no other writer holds it (a server map's writer lock); true when
+  // this writer holds it. A file's writer always does.
+  virtual bool claimMainLine() = 0;
+  virtual void releaseMainLine() = 0;
+  virtual SessionMemory sessionMemory(std::int64_t session_id) const = 0;
+  // Takes the session for this writer until releaseSession() or the store closes: kMapBusy when
+  // another writer has it (a second writer of one session). Nothing to take on a file.
+  virtual void claimSession(std::int64_t session_id) = 0;
+  virtual void releaseSession(std::int64_t session_id) = 0;
+  // In the open transaction: a new session (as beginSession) whose memory is a copy of the main
+  // line's, taken in one snapshot into rows of its own; the session is claimed and, from here
+  // on, this store reads and writes that memory (useSideMemory). A file refuses (kInternal).
+  virtual std::int64_t beginSideSession(const std::string& source,
+                                        const std::map<std::string, std::string>& settings,
+                                        const std::string& software_version) = 0;
+  // From here on, the writer's memory (engine_state's writer keys, the kd-forest, the posterior,
+  // the tiers and ages) is read and written in the rows of side session `session_id`: the
+  // main-line tables are left to the main line. kInvalidArgument on a file.
+  virtual void useSideMemory(std::int64_t session_id) = 0;
+  // Reserves ids of `kind` in the open transaction (so a rolled-back frame gives them back):
+  // at least `count` of them, all at or above `next` and above every id any writer used or
+  // holds in a block.
+  virtual IdBlock reserveIds(IdKind kind, std::int64_t count, std::int64_t next) = 0;
+  // The newest location of every session, and the places of every other session than
+  // `session_id` stored after those (a session's ids grow as it commits).
+  virtual std::map<std::int64_t, std::int64_t> newestLocations() const = 0;
+  virtual std::vector<SharedPlace> placesAfter(
+      std::int64_t session_id, const std::map<std::int64_t, std::int64_t>& newest) const = 0;
 };
 
 }  // namespace placedb::storage

@@ -150,6 +150,22 @@ class SqliteMapStore final : public MapStore {
                  const std::function<void(const TableRow&)>& row) const override;
   void writeRows(const TableColumns& t, const std::vector<TableRow>& rows) override;
 
+  // Writers (map_store.h; a file has one: storage/src/sqlite_map_store_fleet.cpp).
+  bool sharedByWriters() const override;
+  bool claimMainLine() override;
+  void releaseMainLine() override;
+  SessionMemory sessionMemory(std::int64_t session_id) const override;
+  void claimSession(std::int64_t session_id) override;
+  void releaseSession(std::int64_t session_id) override;
+  std::int64_t beginSideSession(const std::string& source,
+                                const std::map<std::string, std::string>& settings,
+                                const std::string& software_version) override;
+  void useSideMemory(std::int64_t session_id) override;
+  IdBlock reserveIds(IdKind kind, std::int64_t count, std::int64_t next) override;
+  std::map<std::int64_t, std::int64_t> newestLocations() const override;
+  std::vector<SharedPlace> placesAfter(
+      std::int64_t session_id, const std::map<std::int64_t, std::int64_t>& newest) const override;
+
  private:
   void requireWritable() const;
   detail::WriteScope writeScope();
