@@ -96,7 +96,17 @@ PgMapStore::PgMapStore(const std::string& uri, OpenMode mode, const OpenOptions&
   migrate();
 }
 
-PgMapStore::~PgMapStore() = default;  // closing the connection releases the writer's lock
+PgMapStore::~PgMapStore() {
+  // Closing the connection would release the locks too, but the server does so only when the
+  // backend has finished exiting: a writer that reopens the map at once could find it busy.
+  try {
+    const std::set<std::int64_t> sessions = claimed_;
+    for (std::int64_t id : sessions) releaseSession(id);
+    releaseMainLine();
+  } catch (const std::exception&) {
+    // A lost connection: the server releases them when it notices.
+  }
+}
 
 void PgMapStore::migrate() {
   const int current = currentSchemaVersion();
