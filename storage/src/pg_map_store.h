@@ -173,6 +173,7 @@ class PgMapStore final : public MapStore {
   SessionMemory sessionMemory(std::int64_t session_id) const override;
   void claimSession(std::int64_t session_id) override;
   void releaseSession(std::int64_t session_id) override;
+  std::int64_t keepUnfinishedMainLine() override;
   std::int64_t beginSideSession(const std::string& source,
                                 const std::map<std::string, std::string>& settings,
                                 const std::string& software_version) override;
@@ -188,6 +189,8 @@ class PgMapStore final : public MapStore {
   std::int64_t storedKdNodeRows() const;
   void migrate();
 
+  // The main line's memory, in one snapshot, into the own rows of `session_id`.
+  void copyMainLineMemory(std::int64_t session_id);
   // A side session's own memory (pg_map_store_fleet.cpp), used instead of the main line's
   // tables when side_session_ is set.
   void sidePutState(const std::string& key, const void* data, std::size_t size);

@@ -88,6 +88,13 @@ std::int64_t PgMapStore::beginSideSession(const std::string& source,
   if (!db_->inTransaction())
     throw StorageError(ErrorCode::kInternal, "beginSideSession outside a transaction");
   const std::int64_t id = beginSession(source, settings, software_version);
+  copyMainLineMemory(id);
+  claimSession(id);
+  side_session_ = id;
+  return id;
+}
+
+void PgMapStore::copyMainLineMemory(std::int64_t session_id) {
   // One statement, one snapshot: the main line commits a frame as a whole, so the copy is the
   // memory it had after one of its frames.
   db_->run(
@@ -100,9 +107,22 @@ std::int64_t PgMapStore::beginSideSession(const std::string& source,
       "INSERT INTO session_memory (session_id, location_id, tier, wm_age) "
       "SELECT $1, l.id, l.tier, w.wm_age FROM locations l "
       "LEFT JOIN wm_entries w ON w.location_id = l.id WHERE l.tier IN (0, 1)",
-      detail::PgParams().add(id).addArray(writerStateKeys()));
-  claimSession(id);
-  side_session_ = id;
+      detail::PgParams().add(session_id).addArray(writerStateKeys()));
+}
+
+std::int64_t PgMapStore::keepUnfinishedMainLine() {
+  requireWritable();
+  if (!main_line_ || !db_->inTransaction())
+    throw StorageError(ErrorCode::kInternal,
+                       "keepUnfinishedMainLine needs the main line and an open transaction");
+  // The main line's newest session is the newest one without memory of its own; holding the
+  // main line, this writer knows no other writer continues it.
+  const auto r = db_->run(
+      "SELECT s.id FROM sessions s WHERE s.clean_close = 0 AND s.id = (SELECT max(id) FROM "
+      "sessions t WHERE NOT EXISTS (SELECT 1 FROM session_state u WHERE u.session_id = t.id))");
+  if (r.rows() == 0) return 0;
+  const std::int64_t id = r.integer(0, 0);
+  copyMainLineMemory(id);
   return id;
 }
 

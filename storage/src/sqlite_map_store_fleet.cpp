@@ -38,6 +38,8 @@ std::int64_t SqliteMapStore::beginSideSession(const std::string&,
                      "map " + path_ + ": a file has one writer, which holds the main line");
 }
 
+std::int64_t SqliteMapStore::keepUnfinishedMainLine() { return 0; }
+
 void SqliteMapStore::useSideMemory(std::int64_t session_id) {
   throw StorageError(ErrorCode::kInvalidArgument,
                      "map " + path_ + ": session " + std::to_string(session_id) +

@@ -3,8 +3,11 @@
 // placedb copy between backends.
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <fstream>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -12,6 +15,7 @@
 #include "file_bytes.h"
 #include "pg_test_server.h"
 #include "placedb/storage/map_store.h"
+#include "subprocess.h"
 
 namespace placedb::testing {
 namespace {
@@ -140,6 +144,42 @@ TEST_F(PgCli, SecondWriterOfASessionExitsFiveOthersBeginTheirOwn) {
   EXPECT_EQ(resumed.exit_code, 0) << describe(resumed);
   auto info = placedb({"info", uri}, dir_);
   EXPECT_NE(info.out.find("frames 10"), std::string::npos) << info.out;
+}
+
+// A robot killed mid-run, whose map's main line another robot's new session takes before it
+// comes back, still resumes its own session: the new session keeps the killed one's memory in
+// rows of its own first. Every frame of both lists is in the map once.
+TEST_F(PgCli, AKilledRobotResumesAfterAnotherSessionTookTheMainLine) {
+  const std::string robot_a = lip6List(dir_, "lip6_a.txt", 0, 60);
+  if (robot_a.empty()) GTEST_SKIP() << "lip6_outdoor absent under " << datasetsDir();
+  const std::string robot_b = lip6List(dir_, "lip6_b.txt", 400, 10);
+  const std::string uri = database("");
+  {
+    Process mapping({PLACEDB_CLI_BINARY, "map", uri, robot_a, "-q"}, dir_);
+    // Killed once it has committed a few frames, wherever it is then.
+    for (int waited = 0; waited < 600; ++waited) {
+      std::int64_t frames = 0;
+      try {
+        frames = storage::openMapStore(uri, storage::OpenMode::kReadOnly)->frameCount();
+      } catch (const std::exception&) {
+        // Not created yet.
+      }
+      if (frames >= 12) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    mapping.signal(SIGKILL);
+    ASSERT_EQ(mapping.wait().exit_code, 128 + SIGKILL);
+  }
+  auto other = placedb({"map", uri, robot_b, "-q"}, dir_);
+  ASSERT_EQ(other.exit_code, 0) << describe(other);
+  auto back = placedb({"map", uri, robot_a}, dir_);
+  ASSERT_EQ(back.exit_code, 0) << describe(back);
+  EXPECT_NE(back.err.find("resuming session 1"), std::string::npos) << back.err;
+  auto store = storage::openMapStore(uri, storage::OpenMode::kReadOnly);
+  EXPECT_EQ(store->frameCount(1), 60);
+  EXPECT_EQ(store->lastFrameIndex(1), 59);
+  EXPECT_EQ(store->frameCount(), 70) << "every frame of both robots once";
+  EXPECT_EQ(store->sessions().size(), 2u);
 }
 
 TEST_F(PgCli, CredentialsNeverShowAndRefusalsHaveTheirCodes) {

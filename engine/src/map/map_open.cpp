@@ -252,6 +252,16 @@ SessionInfo MapImpl::beginSession(const std::string& source, const std::string& 
     main_memory_ = true;
   }
   auto tx = store_->begin();
+  // A killed writer's session keeps the memory it had, for its writer to resume it later.
+  if (const std::int64_t kept = store_->keepUnfinishedMainLine()) {
+    // The main line goes on in the id blocks that session used: when it resumes, its own ids
+    // come from new ones.
+    EngineCounters own = counters_;
+    own.frame_block_end = own.location_block_end = own.word_block_end = 0;
+    store_->useSideMemory(kept);
+    own.save(*store_);
+    store_->useSideMemory(0);
+  }
   std::int64_t id = store_->beginSession(source, options_.toSettings(), PLACEDB_VERSION_STRING);
   store_->claimSession(id);
   if (!source_digest.empty()) store_->setSourceDigest(id, source_digest);

@@ -326,9 +326,17 @@ class MapStore {
   virtual std::int64_t beginSideSession(const std::string& source,
                                         const std::map<std::string, std::string>& settings,
                                         const std::string& software_version) = 0;
+  // In the open transaction, by the writer that holds the main line, before it begins a new
+  // session: when the main line's newest session did not close cleanly (its writer was killed),
+  // that session keeps a copy of the main line's memory in rows of its own, as a side session
+  // has, so that it can still be resumed once the new session continues the main line. Returns
+  // the session kept, 0 for none. A file keeps none: its one writer resumes it before anything
+  // else can begin.
+  virtual std::int64_t keepUnfinishedMainLine() = 0;
   // From here on, the writer's memory (engine_state's writer keys, the kd-forest, the posterior,
   // the tiers and ages) is read and written in the rows of side session `session_id`: the
-  // main-line tables are left to the main line. kInvalidArgument on a file.
+  // main-line tables are left to the main line; 0: the main line's again. kInvalidArgument on a
+  // file.
   virtual void useSideMemory(std::int64_t session_id) = 0;
   // Reserves ids of `kind` in the open transaction (so a rolled-back frame gives them back):
   // at least `count` of them, all at or above `next` and above every id any writer used or

@@ -157,6 +157,7 @@ class SqliteMapStore final : public MapStore {
   SessionMemory sessionMemory(std::int64_t session_id) const override;
   void claimSession(std::int64_t session_id) override;
   void releaseSession(std::int64_t session_id) override;
+  std::int64_t keepUnfinishedMainLine() override;
   std::int64_t beginSideSession(const std::string& source,
                                 const std::map<std::string, std::string>& settings,
                                 const std::string& software_version) override;
