@@ -154,8 +154,9 @@ TEST(Checkpoint, TheLogIsCopiedBackWhileTheWriterGoesOnAndGoneAfterClose) {
   {
     SqliteMapStore writer(path, OpenMode::kReadWrite);
     // 60 commits of ~1 MB each: 15,000 pages of log in all, several checkpoints' worth.
-    const std::vector<std::uint8_t> blob(1 << 20, 0x5a);
+    std::vector<std::uint8_t> blob(1 << 20, 0x5a);
     for (int i = 0; i < 60; ++i) {
+      blob[0] = static_cast<std::uint8_t>(i);  // an unchanged value would write nothing
       auto tx = writer.begin();
       writer.putState("blob." + std::to_string(i % 4), blob);
       tx.commit();
