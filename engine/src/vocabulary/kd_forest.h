@@ -124,6 +124,10 @@ class KdForest {
   // and k neighbours are known, never visiting a branch whose bound exceeds the k-th distance.
   // Safe to call from several threads at once while nothing modifies the forest.
   void search(const float* query, std::size_t k, int checks, std::vector<Neighbor>* out) const;
+  // search() of `count` queries at once, outs[i] for queries[i]: one step of each in turn, so
+  // that each one's memory loads overlap the others' work. Each result is what search() gives.
+  void search(const float* const* queries, std::vector<Neighbor>* const* outs, std::size_t count,
+              std::size_t k, int checks) const;
 
   // Every internal node, by tree then node id.
   std::vector<ForestNode> internalNodes() const;
@@ -174,6 +178,10 @@ class KdForest {
       return node > o.node;
     }
   };
+
+  struct Walk;  // one search between its steps (kd_forest_search.cpp)
+  void advance(Walk& walk, std::size_t k, int checks) const;
+  bool nextDescent(Walk& walk, std::size_t k, int checks) const;
 
   std::int32_t leafOf(const Tree& tree, const float* v) const;
   void trySplit(std::uint32_t tree_index, std::int32_t node_index);

@@ -15,6 +15,10 @@ namespace placedb::vocab {
 
 namespace {
 
+// Features searched together, their steps interleaved (KdForest::search): enough to keep
+// several loads in flight, few enough that their marks and queues stay in L1 cache.
+constexpr int kSearchGroup = 8;
+
 void require(bool ok, const std::string& message) {
   if (!ok) throw Error(ErrorCode::kInvalidArgument, "vocabulary: " + message);
 }
@@ -110,8 +114,19 @@ Quantization Vocabulary::quantize(const cv::Mat& descriptors, std::int64_t frame
   // ND, NND and nearest word of every feature against V_{t-1}.
   std::vector<std::vector<Neighbor>> best(m);
   const std::size_t k = options_.fixed ? 1 : 2;
-  parallelFor(m, resolveThreadCount(options_.threads),
-              [&](int i) { forest_->search(row(i), k, options_.checks, &best[i]); });
+  std::vector<const float*> queries(m);
+  std::vector<std::vector<Neighbor>*> outs(m);
+  for (int i = 0; i < m; ++i) {
+    queries[i] = row(i);
+    outs[i] = &best[i];
+  }
+  const int groups = (m + kSearchGroup - 1) / kSearchGroup;
+  parallelFor(groups, resolveThreadCount(options_.threads), [&](int g) {
+    const int first = g * kSearchGroup;
+    forest_->search(queries.data() + first, outs.data() + first,
+                    static_cast<std::size_t>(std::min(kSearchGroup, m - first)), k,
+                    options_.checks);
+  });
 
   if (options_.fixed) {
     double sum = 0;
