@@ -89,6 +89,34 @@ TEST(ForestSearch, SeveralQueriesAtOnceFindWhatEachFindsAlone) {
   }
 }
 
+TEST(ForestInsert, ABatchGrowsTheTreesOneSlotAtATimeWould) {
+  std::mt19937 rng(8);
+  const cv::Mat points = randomRows(rng, 5000);
+  SlotStore one_store(kDim), batch_store(kDim);
+  KdForest one(&one_store, 4, 8, 7), batch(&batch_store, 4, 8, 7);
+  std::vector<std::uint32_t> slots;
+  // Batches of several sizes, so that slots of one batch split leaves that others found.
+  const std::size_t sizes[] = {1, 7, 64, 300};
+  std::size_t batches = 0;
+  for (int i = 0; i < points.rows; ++i) {
+    one.insert(one_store.add(i, 0, points.ptr<float>(i)));
+    slots.push_back(batch_store.add(i, 0, points.ptr<float>(i)));
+    if (slots.size() == sizes[batches % 4] || i + 1 == points.rows) {
+      batch.insert(slots.data(), slots.size());
+      slots.clear();
+      ++batches;
+    }
+  }
+  EXPECT_EQ(batch.internalNodes(), one.internalNodes());
+  std::vector<Neighbor> a, b;
+  for (int q = 0; q < 50; ++q) {
+    one.search(points.ptr<float>(q * 7), 2, 64, &a);
+    batch.search(points.ptr<float>(q * 7), 2, 64, &b);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t n = 0; n < a.size(); ++n) EXPECT_EQ(a[n].id, b[n].id);
+  }
+}
+
 std::vector<Quantization> quantizeFrames(int threads) {
   VocabularyOptions o;
   o.threads = threads;

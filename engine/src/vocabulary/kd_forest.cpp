@@ -66,14 +66,56 @@ void KdForest::reserveSlots(std::size_t slots) {
     if (tree.leaf_of.size() < slots) tree.leaf_of.resize(slots, -1);
 }
 
-void KdForest::insert(std::uint32_t slot) {
-  reserveSlots(std::size_t(slot) + 1);
-  const float* v = store_->data(slot);
+void KdForest::insert(std::uint32_t slot) { insert(&slot, 1); }
+
+void KdForest::insert(const std::uint32_t* slots, std::size_t count) {
+  if (count == 0) return;
+  reserveSlots(std::size_t(*std::max_element(slots, slots + count)) + 1);
+  // Tree by tree: the trees share nothing, so this is the order of one slot at a time. The leaves
+  // are found for all slots first, several descents side by side (leavesOf); a leaf that a slot
+  // before this one split since is then descended further, as the splits only ever turned leaves
+  // into internal nodes.
+  std::vector<std::int32_t> leaves(count);
   for (std::uint32_t t = 0; t < trees_.size(); ++t) {
-    const std::int32_t leaf = leafOf(trees_[t], v);
-    placeInLeaf(trees_[t], slot, leaf);
-    if (trees_[t].buckets[static_cast<std::size_t>(leaf)].size() > std::size_t(leaf_size_))
-      trySplit(t, leaf);
+    Tree& tree = trees_[t];
+    leavesOf(tree, slots, count, leaves.data());
+    for (std::size_t i = 0; i < count; ++i) {
+      const float* v = store_->data(slots[i]);
+      std::int32_t leaf = leaves[i];
+      while (tree.nodes[static_cast<std::size_t>(leaf)].left >= 0) {
+        const Node& n = tree.nodes[static_cast<std::size_t>(leaf)];
+        leaf = v[n.dim] < n.value ? n.left : n.right;
+      }
+      placeInLeaf(tree, slots[i], leaf);
+      if (tree.buckets[static_cast<std::size_t>(leaf)].size() > std::size_t(leaf_size_))
+        trySplit(t, leaf);
+    }
+  }
+}
+
+void KdForest::leavesOf(const Tree& tree, const std::uint32_t* slots, std::size_t count,
+                        std::int32_t* leaves) const {
+  // Each descent waits on one node at a time: kGroup of them in turn keep as many loads in
+  // flight, each step asking for the node the next one reads.
+  constexpr std::size_t kGroup = 8;
+  for (std::size_t first = 0; first < count; first += kGroup) {
+    const std::size_t n = std::min(kGroup, count - first);
+    const float* v[kGroup];
+    for (std::size_t j = 0; j < n; ++j) {
+      v[j] = store_->data(slots[first + j]);
+      leaves[first + j] = 0;
+    }
+    for (bool moved = true; moved;) {
+      moved = false;
+      for (std::size_t j = 0; j < n; ++j) {
+        std::int32_t& node = leaves[first + j];
+        const Node& at = tree.nodes[static_cast<std::size_t>(node)];
+        if (at.left < 0) continue;
+        node = v[j][at.dim] < at.value ? at.left : at.right;
+        __builtin_prefetch(&tree.nodes[static_cast<std::size_t>(node)]);
+        moved = true;
+      }
+    }
   }
 }
 

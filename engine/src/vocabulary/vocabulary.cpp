@@ -94,10 +94,11 @@ bool Vocabulary::decideNewWord(const std::vector<Neighbor>& best) const {
   return nd > options_.t_nndr * inUnit(best[1].dist2);
 }
 
-void Vocabulary::addWord(std::int64_t id, std::int64_t created_frame, const float* descriptor) {
+std::uint32_t Vocabulary::storeWord(std::int64_t id, std::int64_t created_frame,
+                                    const float* descriptor) {
   const std::uint32_t slot = store_.add(id, created_frame, descriptor);
   slot_of_.set(id, slot);
-  forest_->insert(slot);
+  return slot;
 }
 
 Quantization Vocabulary::quantize(const cv::Mat& descriptors, std::int64_t frame_id) {
@@ -175,9 +176,10 @@ Quantization Vocabulary::quantize(const cv::Mat& descriptors, std::int64_t frame
       q.distance_of_feature[i] = std::sqrt(top[0].dist2);
     }
   }
-  for (std::size_t w = 0; w < created_rows.size(); ++w) {
-    addWord(q.created_words[w], frame_id, row(created_rows[w]));
-  }
+  std::vector<std::uint32_t> slots(created_rows.size());
+  for (std::size_t w = 0; w < created_rows.size(); ++w)
+    slots[w] = storeWord(q.created_words[w], frame_id, row(created_rows[w]));
+  forest_->insert(slots.data(), slots.size());
   double sum = 0;
   for (float d : q.distance_of_feature) sum += d;
   q.mean_error = sum / m;
@@ -197,10 +199,12 @@ void Vocabulary::insert(const std::vector<std::int64_t>& ids, const cv::Mat& des
   }
   touched_ = true;
   const cv::Mat rows = descriptors.isContinuous() ? descriptors : descriptors.clone();
+  std::vector<std::uint32_t> slots(ids.size());
   for (std::size_t i = 0; i < ids.size(); ++i) {
-    addWord(ids[i], created_frames[i], rows.ptr<float>(int(i)));
+    slots[i] = storeWord(ids[i], created_frames[i], rows.ptr<float>(int(i)));
     next_word_id_ = std::max(next_word_id_, ids[i] + 1);
   }
+  forest_->insert(slots.data(), slots.size());
 }
 
 void Vocabulary::erase(const std::vector<std::int64_t>& ids) {
