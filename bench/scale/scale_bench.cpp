@@ -74,6 +74,22 @@ double percentile(std::vector<double> v, double p) {
                     static_cast<std::size_t>(std::lround(p / 100.0 * (v.size() - 1))))];
 }
 
+// One window's stage times.
+struct StageSums {
+  std::vector<placedb::StageTimes> frames;
+  std::vector<double> memory, storage;
+  void add(const placedb::StageTimes& t) {
+    frames.push_back(t);
+    memory.push_back(t.memory);
+    storage.push_back(t.storage);
+  }
+  double mean(double placedb::StageTimes::*stage) const {
+    double sum = 0;
+    for (const auto& t : frames) sum += t.*stage;
+    return frames.empty() ? 0.0 : sum / double(frames.size());
+  }
+};
+
 double peakRssMiB() {
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
@@ -324,15 +340,19 @@ int main(int argc, char** argv) {
                flags.settings.empty() ? "" : " except --set", flags.map.string());
     fmt::print(
         "{:>7} {:>8} {:>8} {:>8} {:>6} {:>7} {:>8} {:>8} {:>9} {:>9} {:>9} {:>8} {:>6} {:>6} "
-        "{:>6}\n",
+        "{:>6} | {:>5} {:>5} {:>5} {:>5} {:>5} {:>5} {:>7} {:>7}\n",
         "frames", "p50 ms", "p99 ms", "max ms", "wm", "ltm", "peakRSS", "curRSS", "B/locatn",
-        "reopen ms", "query ms", "q found", "loops", "true", "listed");
+        "reopen ms", "query ms", "q found", "loops", "true", "listed", "feat", "quant", "filt",
+        "verif", "mem", "stor", "mem p99", "stor p99");
     std::fflush(stdout);
 
     removeMap(flags.map);
     auto map = placedb::Map::open(flags.map.string(), options);
     map->beginSession("synthetic scale");
     std::vector<double> window_times;
+    // Per stage, to find what grows with the map: means, and the p99 of the two stages that
+    // touch long-term memory.
+    StageSums stages;
     int accepted = 0, accepted_true = 0, accepted_listed = 0;
     std::int64_t locations = 0;
     for (int i = 0; i < seq.size(); ++i) {
@@ -340,6 +360,7 @@ int main(int argc, char** argv) {
       auto start = Clock::now();
       placedb::FrameResult r = map->process(image, i, "frame " + std::to_string(i));
       window_times.push_back(msBetween(start, Clock::now()));
+      stages.add(r.times);
       locations = std::max(locations, r.location_id);
       if (r.hypothesis.accepted) {
         ++accepted;
@@ -362,13 +383,21 @@ int main(int argc, char** argv) {
       std::int64_t ltm = locations - static_cast<std::int64_t>(r.wm_size + r.stm_size);
       fmt::print(
           "{:>7} {:>8.2f} {:>8.2f} {:>8.1f} {:>6} {:>7} {:>7.0f}M {:>7.0f}M {:>9.0f} "
-          "{:>9.1f} {:>9.1f} {:>5}/{:<2} {:>6} {:>6} {:>6}\n",
+          "{:>9.1f} {:>9.1f} {:>5}/{:<2} {:>6} {:>6} {:>6} | {:>5.2f} {:>5.2f} {:>5.2f} {:>5.2f} "
+          "{:>5.2f} {:>5.2f} {:>7.2f} {:>7.2f}\n",
           i + 1, percentile(window_times, 50), percentile(window_times, 99),
           *std::max_element(window_times.begin(), window_times.end()), r.wm_size, ltm, peakRssMiB(),
           currentRssMiB(), double(mapBytes(flags.map)) / std::max<std::int64_t>(1, locations),
-          reopen_ms, q.p50, q.found, q.asked, accepted, accepted_true, accepted_listed);
+          reopen_ms, q.p50, q.found, q.asked, accepted, accepted_true, accepted_listed,
+          stages.mean(&placedb::StageTimes::features),
+          stages.mean(&placedb::StageTimes::quantisation),
+          stages.mean(&placedb::StageTimes::filter),
+          stages.mean(&placedb::StageTimes::verification),
+          stages.mean(&placedb::StageTimes::memory), stages.mean(&placedb::StageTimes::storage),
+          percentile(stages.memory, 99), percentile(stages.storage, 99));
       std::fflush(stdout);
       window_times.clear();
+      stages = StageSums();
       if (closures) std::fflush(closures);
     }
     map->close();

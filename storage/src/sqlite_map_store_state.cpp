@@ -5,6 +5,7 @@
 #include "database.h"
 #include "placedb/storage/sqlite_map_store.h"
 #include "row_checksums.h"
+#include "sqlite_rows.h"
 
 namespace placedb::storage {
 
@@ -95,7 +96,12 @@ void SqliteMapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
     }
   }
   if (!upserts.empty()) {
-    // An update first, an insert when no row changed: the row count follows without a count(*).
+    // Most upserts are splits, whose node had no row: an insert that gives way to an existing
+    // row first, then the update, and a plain insert last, so that a row neither could write
+    // fails as it should. The row count follows without a count(*).
+    auto add = db_->cached(
+        "INSERT OR IGNORE INTO kd_nodes (tree, node, left_child, right_child, split_dim, "
+        "split_value, checksum) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
     auto update = db_->cached(
         "UPDATE kd_nodes SET left_child = ?3, right_child = ?4, split_dim = ?5, split_value = ?6, "
         "checksum = ?7 WHERE tree = ?1 AND node = ?2");
@@ -105,7 +111,7 @@ void SqliteMapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
     for (const KdNodeRecord& n : upserts) {
       const std::int64_t sum = detail::kdNodeChecksum(n.tree, n.node, n.left_child, n.right_child,
                                                       n.split_dim, n.split_value);
-      for (detail::Statement* s : {&*update, &*insert}) {
+      for (detail::Statement* s : {&*add, &*update, &*insert}) {
         s->bind(1, std::int64_t(n.tree));
         s->bind(2, n.node);
         s->bind(3, n.left_child);
@@ -114,8 +120,9 @@ void SqliteMapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
         s->bind(6, n.split_value);
         s->bind(7, sum);
         s->run();
-        if (s == &*insert) ++rows;
-        if (sqlite3_changes(db_->handle()) > 0) break;
+        const bool changed = sqlite3_changes(db_->handle()) > 0;
+        if (s != &*update && changed) ++rows;
+        if (changed) break;
       }
     }
   }
@@ -161,12 +168,11 @@ void SqliteMapStore::putPosterior(const std::vector<std::pair<std::int64_t, doub
     auto s = db_->cached("DELETE FROM filter_posterior");
     s->run();
   }
-  auto s = db_->cached("INSERT INTO filter_posterior (location_id, probability) VALUES (?1, ?2)");
-  for (const auto& [location_id, probability] : posterior) {
-    s->bind(1, location_id);
-    s->bind(2, probability);
-    s->run();
-  }
+  static const detail::RowInserts sql("INSERT", "filter_posterior (location_id, probability)", 2);
+  detail::insertRows(*db_, sql, posterior.size(), [&](detail::Statement& s, int at, std::size_t i) {
+    s.bind(at + 1, posterior[i].first);
+    s.bind(at + 2, posterior[i].second);
+  });
   scope.commit();
 }
 

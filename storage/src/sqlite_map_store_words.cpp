@@ -4,10 +4,12 @@
 #include <cmath>
 #include <cstring>
 #include <set>
+#include <string>
 
 #include "database.h"
 #include "placedb/storage/sqlite_map_store.h"
 #include "row_checksums.h"
+#include "sqlite_rows.h"
 
 namespace placedb::storage {
 namespace {
@@ -20,9 +22,6 @@ std::size_t bytesPerValue(DescriptorKind type) { return type == DescriptorKind::
 
 void SqliteMapStore::insertWords(const std::vector<WordRecord>& words) {
   auto scope = writeScope();
-  auto s = db_->cached(
-      "INSERT INTO words (id, created_frame, vocabulary_import_id, descriptor_type, dim, "
-      "descriptor, source_frame, checksum) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)");
   for (const WordRecord& w : words) {
     if (w.dim <= 0 ||
         w.descriptor.size() != static_cast<std::size_t>(w.dim) * bytesPerValue(w.type)) {
@@ -31,17 +30,24 @@ void SqliteMapStore::insertWords(const std::vector<WordRecord>& words) {
                              std::to_string(w.descriptor.size()) + " bytes does not match dim " +
                              std::to_string(w.dim));
     }
-    s->bind(1, w.id);
-    s->bind(2, w.created_frame);
-    s->bind(3, w.vocabulary_import_id);
-    s->bind(4, std::int64_t{static_cast<int>(w.type)});
-    s->bind(5, std::int64_t{w.dim});
-    s->bindBlob(6, w.descriptor.data(), w.descriptor.size());
-    s->bind(7, w.source_frame);
-    s->bind(8, std::int64_t{detail::wordChecksum(w.id, w.created_frame, static_cast<int>(w.type),
-                                                 w.dim, w.descriptor.data(), w.descriptor.size())});
-    s->run();
   }
+  static const detail::RowInserts sql("INSERT",
+                                      "words (id, created_frame, vocabulary_import_id, "
+                                      "descriptor_type, dim, descriptor, source_frame, checksum)",
+                                      8);
+  detail::insertRows(*db_, sql, words.size(), [&](detail::Statement& s, int at, std::size_t i) {
+    const WordRecord& w = words[i];
+    s.bind(at + 1, w.id);
+    s.bind(at + 2, w.created_frame);
+    s.bind(at + 3, w.vocabulary_import_id);
+    s.bind(at + 4, std::int64_t{static_cast<int>(w.type)});
+    s.bind(at + 5, std::int64_t{w.dim});
+    s.bindBlob(at + 6, w.descriptor.data(), w.descriptor.size());
+    s.bind(at + 7, w.source_frame);
+    s.bind(at + 8,
+           std::int64_t{detail::wordChecksum(w.id, w.created_frame, static_cast<int>(w.type), w.dim,
+                                             w.descriptor.data(), w.descriptor.size())});
+  });
   scope.commit();
 }
 
@@ -149,20 +155,19 @@ void SqliteMapStore::insertWordRefs(std::int64_t location_id, const std::vector<
     s->step();
     if (!s->isNull(0)) ordinal = s->columnInt(0) + 1;
   }
-  auto s = db_->cached(
-      "INSERT INTO word_refs (location_id, ordinal, word_id, x, y, size, angle, response) "
-      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)");
-  for (const WordRef& r : refs) {
-    s->bind(1, location_id);
-    s->bind(2, ordinal++);
-    s->bind(3, r.word_id);
-    s->bind(4, double{r.x});
-    s->bind(5, double{r.y});
-    s->bind(6, double{r.size});
-    s->bind(7, double{r.angle});
-    s->bind(8, double{r.response});
-    s->run();
-  }
+  static const detail::RowInserts sql(
+      "INSERT", "word_refs (location_id, ordinal, word_id, x, y, size, angle, response)", 8);
+  detail::insertRows(*db_, sql, refs.size(), [&](detail::Statement& s, int at, std::size_t i) {
+    const WordRef& r = refs[i];
+    s.bind(at + 1, location_id);
+    s.bind(at + 2, ordinal + static_cast<std::int64_t>(i));
+    s.bind(at + 3, r.word_id);
+    s.bind(at + 4, double{r.x});
+    s.bind(at + 5, double{r.y});
+    s.bind(at + 6, double{r.size});
+    s.bind(at + 7, double{r.angle});
+    s.bind(at + 8, double{r.response});
+  });
   scope.commit();
 }
 

@@ -39,6 +39,7 @@ int WalCheckpointer::onCommit(void* self, sqlite3* db, const char* schema, int p
 
 void WalCheckpointer::run() {
   sqlite3* db = nullptr;
+  bool reading = false;
   for (;;) {
     {
       std::unique_lock<std::mutex> lock(mutex_);
@@ -50,6 +51,12 @@ void WalCheckpointer::run() {
       sqlite3_close(db);  // a failed open still allocates a handle
       db = nullptr;
       continue;  // the writer's own checkpoint (8x the threshold) takes over
+    }
+    if (!reading) {
+      // A connection learns that the map is in WAL mode from its header, at its first read;
+      // until then sqlite3_wal_checkpoint_v2() finds no log and returns SQLITE_OK doing nothing.
+      reading = sqlite3_exec(db, "PRAGMA schema_version", nullptr, nullptr, nullptr) == SQLITE_OK;
+      if (!reading) continue;
     }
     // Errors (a full disk) leave the log as it was; the next request, or the writer's close,
     // tries again, and the writer reports what its own statements meet.

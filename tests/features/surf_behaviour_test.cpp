@@ -4,11 +4,13 @@
 
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 #include <opencv2/imgproc.hpp>
 
 #include "features/feature_extractor.h"
 #include "features/image_conversion.h"
+#include "features/surf_descriptor.h"
 #include "test_paths.h"
 
 namespace placedb {
@@ -183,6 +185,41 @@ TEST(SurfBehaviour, FeatureTargetLeavesAnImageWithMoreThanItAlone) {
   options.feature_retry = 0.5;
   options.feature_target = 2 * static_cast<int>(plain.size()) - 1;  // more than half of it
   EXPECT_TRUE(bitIdentical(plain, surfOf(image, options)));
+}
+
+// The orientation bin as SURF defines it here: atan2f, float arithmetic as written.
+int atan2fBin(float rx, float ry) {
+  const float pi = 3.14159265358979f;
+  const float angle = std::atan2(ry, rx) + pi;
+  const int bin = static_cast<int>(angle * (72 / (2.0f * pi)));
+  return bin >= 72 ? bin - 72 : bin;
+}
+
+TEST(SurfBehaviour, OrientationBinsAreAtan2fsOnEveryResponse) {
+  // Haar responses are integers: every one up to 300 either way (the axes, the diagonals and
+  // the bin edges among them), then large random ones.
+  std::vector<float> rx, ry;
+  for (int x = -300; x <= 300; ++x) {
+    for (int y = -300; y <= 300; ++y) {
+      rx.push_back(static_cast<float>(x));
+      ry.push_back(static_cast<float>(y));
+    }
+  }
+  cv::RNG rng(9);
+  for (int i = 0; i < 200000; ++i) {
+    rx.push_back(static_cast<float>(rng.uniform(-5000000, 5000000)));
+    ry.push_back(static_cast<float>(rng.uniform(-5000000, 5000000)));
+  }
+  std::vector<int> bins(rx.size());
+  surfOrientationBins(rx.data(), ry.data(), static_cast<int>(rx.size()), bins.data());
+  int wrong = 0;
+  for (std::size_t i = 0; i < rx.size(); ++i) {
+    const int expected = rx[i] == 0.0f && ry[i] == 0.0f ? -1 : atan2fBin(rx[i], ry[i]);
+    if (bins[i] != expected && ++wrong <= 5)
+      ADD_FAILURE() << "(" << rx[i] << ", " << ry[i] << "): bin " << bins[i] << ", atan2f "
+                    << expected;
+  }
+  EXPECT_EQ(wrong, 0);
 }
 
 TEST(SurfBehaviour, FlatImageGivesNoFeatures) {

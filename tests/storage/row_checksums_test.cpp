@@ -46,6 +46,67 @@ void loadFloats(MapStore& store, std::vector<std::int64_t> ids) {
   store.loadFloatDescriptors(ids, 8, rows.data(), created.data());
 }
 
+// CRC-32C one bit at a time, from SCHEMA.md's definition alone (reflected polynomial
+// 0x82F63B78, all ones in and out): whatever instructions placedb sums with, the stored sums must
+// be these.
+struct BitwiseCrc32c {
+  std::uint32_t r = 0xFFFFFFFF;
+  void bytes(const void* data, std::size_t size) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < size; ++i) {
+      r ^= p[i];
+      for (int bit = 0; bit < 8; ++bit) r = (r >> 1) ^ (0x82F63B78u & (0u - (r & 1u)));
+    }
+  }
+  void integer(std::int64_t v) {
+    unsigned char le[8];
+    for (int i = 0; i < 8; ++i)
+      le[i] = static_cast<unsigned char>(static_cast<std::uint64_t>(v) >> (8 * i));
+    bytes(le, 8);
+  }
+  std::int64_t sum() const { return std::int64_t{~r}; }
+};
+
+TEST(RowChecksums, StoredSumsAreTheDocumentedCrc32c) {
+  BitwiseCrc32c check;
+  check.bytes("123456789", 9);
+  ASSERT_EQ(check.sum(), 0xE3069283);  // the standard check value of CRC-32C
+  const auto dir = placedb::testing::scratchDir("RowChecksumValues");
+  const std::string path = (dir / "sums.placedb").string();
+  // Lengths that are not multiples of 8, so that every tail of the sum is exercised.
+  const std::vector<std::uint8_t> value{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11};
+  const std::vector<std::int8_t> code{1, -2, 3, -4, 5};
+  const std::vector<float> descriptor{0.5f, -0.25f, 1.f, 0.f, 3.f, -7.f, 0.125f, 2.f};
+  {
+    SqliteMapStore store(path, OpenMode::kReadWrite);
+    const std::int64_t session = store.beginSession("test", {}, "test");
+    testing::writeFrame(store, session, 0);
+    store.insertWords({WordRecord::fromFloats(1000, std::nullopt, descriptor.data(), 8)});
+    store.putState("k.odd", value);
+    store.putPlaceCode(1, code);
+  }
+  BitwiseCrc32c word;
+  word.integer(1000);
+  word.integer(-1);  // no created_frame
+  word.integer(0);   // float32
+  word.integer(8);
+  word.bytes(descriptor.data(), descriptor.size() * sizeof(float));
+  BitwiseCrc32c state;
+  state.integer(5);
+  state.bytes("k.odd", 5);
+  state.bytes(value.data(), value.size());
+  BitwiseCrc32c place;
+  place.integer(1);
+  place.bytes(code.data(), code.size());
+  RawDb db(path);
+  EXPECT_EQ(db.rows("SELECT checksum FROM words WHERE id = 1000"),
+            std::vector<std::string>{std::to_string(word.sum())});
+  EXPECT_EQ(db.rows("SELECT checksum FROM engine_state WHERE key = 'k.odd'"),
+            std::vector<std::string>{std::to_string(state.sum())});
+  EXPECT_EQ(db.rows("SELECT checksum FROM place_codes WHERE location_id = 1"),
+            std::vector<std::string>{std::to_string(place.sum())});
+}
+
 TEST(RowChecksums, DamageInsideRowsIsRefusedNamingTheRow) {
   const auto dir = placedb::testing::scratchDir("RowChecksumsDamage");
   const std::string good = makeMap(dir);

@@ -7,6 +7,7 @@ target_sources(placedb_engine PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/integral_image.cpp
   ${CMAKE_CURRENT_LIST_DIR}/keypoint_ranking.cpp
   ${CMAKE_CURRENT_LIST_DIR}/opencv_extractors.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/parallel_for.cpp
   ${CMAKE_CURRENT_LIST_DIR}/surf_descriptor.cpp
   ${CMAKE_CURRENT_LIST_DIR}/surf_detector.cpp
   ${CMAKE_CURRENT_LIST_DIR}/surf_extractor.cpp)

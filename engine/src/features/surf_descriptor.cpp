@@ -1,7 +1,11 @@
 #include "features/surf_descriptor.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "features/parallel_for.h"
 
@@ -13,7 +17,9 @@ constexpr int kOrientationRadius = 6;  // in units of the scale s
 constexpr float kOrientationSigma = 2.0f;
 constexpr int kOrientationBins = 72;        // 5 degrees each
 constexpr int kOrientationWindowBins = 12;  // 60 degrees
-constexpr int kDescriptorSamples = 20;      // per side of the 20s window
+// Samples of the orientation disc, at most: those of its bounding square.
+constexpr int kOrientationSamplesMax = (2 * kOrientationRadius + 1) * (2 * kOrientationRadius + 1);
+constexpr int kDescriptorSamples = 20;  // per side of the 20s window
 constexpr int kSamplesPerSubregion = 5;
 constexpr float kDescriptorSigma = 3.3f;
 constexpr int kKeypointsPerTask = 32;
@@ -87,31 +93,138 @@ const std::array<float, kDescriptorSamples * kDescriptorSamples>& descriptorWeig
   return weights;
 }
 
+// The orientation bin of a response, as atan2f puts it.
+int exactOrientationBin(float rx, float ry) {
+  const float angle = std::atan2(ry, rx) + kPi;  // [0, 2 pi]
+  int bin = static_cast<int>(angle * (kOrientationBins / (2.0f * kPi)));
+  if (bin >= kOrientationBins) bin -= kOrientationBins;
+  return bin;
+}
+
+// orientationBin() is exactOrientationBin() without atan2f (a sixth of SURF's instructions on
+// lip6_outdoor) for all but the responses within kBinEdgeMargin of a bin edge. In units of bins,
+// atan2f's result is within a few ulp of the true angle, and the float sum and product add half
+// an ulp each: under 2e-5 of a bin in all. The series below is within 2e-8 radians (2.3e-7
+// bins) of the true angle, its double arithmetic far closer. A response further than
+// kBinEdgeMargin from an edge therefore falls in the same bin either way.
+constexpr double kBinEdgeMargin = 1e-4;
+
+constexpr double kTanPiOver8 = 0.41421356237309503;
+constexpr double kPiD = 3.14159265358979323846;
+const double kToBins = static_cast<double>(kOrientationBins / (2.0f * kPi));
+// atan(u) = u (1 - u^2 / 3 + u^4 / 5 - ... - u^14 / 15) for |u| <= tan(pi / 8): the first term
+// left out, |u|^17 / 17, is under 1.8e-8. Highest power first, for Horner's rule.
+constexpr double kAtanSeries[] = {-1.0 / 15, 1.0 / 13, -1.0 / 11, 1.0 / 9,
+                                  -1.0 / 7,  1.0 / 5,  -1.0 / 3,  1.0};
+
+// Where a response's angle falls, in bins from the edge of bin 0 (atan2 + pi, scaled), for
+// orientationBin(). A response (0, 0) gives NaN.
+double orientationPosition(float rx, float ry) {
+  const double x = rx, y = ry;
+  const double ax = std::abs(x), ay = std::abs(y);
+  // atan of t = min / max in [0, 1]; above tan(pi / 8), through atan(t) = pi / 4 + atan(u).
+  const double t = std::min(ax, ay) / std::max(ax, ay);
+  const bool folded = t > kTanPiOver8;
+  const double u = folded ? (t - 1) / (t + 1) : t;
+  double series = 0;
+  for (double c : kAtanSeries) series = c + u * u * series;
+  double a = (folded ? kPiD / 4 : 0.0) + u * series;
+  if (ay > ax) a = kPiD / 2 - a;
+  if (x < 0) a = kPiD - a;
+  if (y < 0) a = -a;
+  return (a + static_cast<double>(kPi)) * kToBins;
+}
+
+void orientationPositions(const float* rx, const float* ry, int count, double* positions) {
+  int i = 0;
+#if defined(__SSE2__)
+  // orientationPosition() two responses at a time, its branches as masks (the compiler keeps
+  // them branches and takes one response at a time).
+  const auto select = [](__m128d mask, __m128d yes, __m128d no) {
+    return _mm_or_pd(_mm_and_pd(mask, yes), _mm_andnot_pd(mask, no));
+  };
+  const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0), sign = _mm_set1_pd(-0.0);
+  for (; i + 2 <= count; i += 2) {
+    const __m128d x = _mm_set_pd(rx[i + 1], rx[i]), y = _mm_set_pd(ry[i + 1], ry[i]);
+    const __m128d ax = _mm_andnot_pd(sign, x), ay = _mm_andnot_pd(sign, y);
+    const __m128d t = _mm_div_pd(_mm_min_pd(ax, ay), _mm_max_pd(ax, ay));
+    const __m128d folded = _mm_cmpgt_pd(t, _mm_set1_pd(kTanPiOver8));
+    const __m128d u = select(folded, _mm_div_pd(_mm_sub_pd(t, one), _mm_add_pd(t, one)), t);
+    const __m128d z = _mm_mul_pd(u, u);
+    __m128d series = zero;
+    for (double c : kAtanSeries) series = _mm_add_pd(_mm_set1_pd(c), _mm_mul_pd(z, series));
+    __m128d a = _mm_add_pd(_mm_and_pd(folded, _mm_set1_pd(kPiD / 4)), _mm_mul_pd(u, series));
+    a = select(_mm_cmpgt_pd(ay, ax), _mm_sub_pd(_mm_set1_pd(kPiD / 2), a), a);
+    a = select(_mm_cmplt_pd(x, zero), _mm_sub_pd(_mm_set1_pd(kPiD), a), a);
+    a = _mm_xor_pd(a, _mm_and_pd(_mm_cmplt_pd(y, zero), sign));
+    const __m128d shifted = _mm_add_pd(a, _mm_set1_pd(static_cast<double>(kPi)));
+    _mm_storeu_pd(positions + i, _mm_mul_pd(shifted, _mm_set1_pd(kToBins)));
+  }
+#endif
+  for (; i < count; ++i) positions[i] = orientationPosition(rx[i], ry[i]);
+}
+
+int orientationBin(double position, float rx, float ry) {
+  // position > 0: the float pi is above pi.
+  const int bin = static_cast<int>(position);
+  const double within = position - bin;
+  if (within <= kBinEdgeMargin || within >= 1 - kBinEdgeMargin) return exactOrientationBin(rx, ry);
+  return bin >= kOrientationBins ? bin - kOrientationBins : bin;
+}
+
 }  // namespace
+
+void surfOrientationBins(const float* rx, const float* ry, int count, int* bins) {
+  constexpr int kBlock = 64;
+  double positions[kBlock];
+  for (int first = 0; first < count; first += kBlock) {
+    const int n = std::min(kBlock, count - first);
+    orientationPositions(rx + first, ry + first, n, positions);
+    for (int i = 0; i < n; ++i) {
+      const float x = rx[first + i], y = ry[first + i];
+      bins[first + i] = x == 0.0f && y == 0.0f ? -1 : orientationBin(positions[i], x, y);
+    }
+  }
+}
 
 float surfOrientation(const IntegralImage& integral, const cv::KeyPoint& keypoint) {
   const float s = blobScale(keypoint);
   const int half = std::max(1, static_cast<int>(std::lround(2.0f * s)));  // side 4s
-  std::array<float, kOrientationBins> bin_x{}, bin_y{};
-  for (const OrientationSample& sample : orientationSamples()) {
-    float rx, ry;
+  const std::vector<OrientationSample>& samples = orientationSamples();
+  const int count = static_cast<int>(samples.size());
+  std::array<float, kOrientationSamplesMax> rx, ry;
+  for (int i = 0; i < count; ++i) {
+    const OrientationSample& sample = samples[static_cast<std::size_t>(i)];
     haarResponses(integral, nearestBoundary(keypoint.pt.x + sample.i * s),
-                  nearestBoundary(keypoint.pt.y + sample.j * s), half, rx, ry);
-    if (rx == 0.0f && ry == 0.0f) continue;
-    const float angle = std::atan2(ry, rx) + kPi;  // [0, 2 pi]
-    int bin = static_cast<int>(angle * (kOrientationBins / (2.0f * kPi)));
-    if (bin >= kOrientationBins) bin -= kOrientationBins;
-    bin_x[bin] += rx * sample.weight;
-    bin_y[bin] += ry * sample.weight;
+                  nearestBoundary(keypoint.pt.y + sample.j * s), half, rx[i], ry[i]);
+  }
+  std::array<int, kOrientationSamplesMax> bins;
+  surfOrientationBins(rx.data(), ry.data(), count, bins.data());
+  // The bins and their window sums, each in the order of the straightforward loops. The bins
+  // repeat past the last so that a window needs no wrap-around.
+  std::array<float, kOrientationBins + kOrientationWindowBins> bin_x{}, bin_y{};
+  for (int i = 0; i < count; ++i) {
+    const int bin = bins[i];
+    if (bin < 0) continue;
+    const float weight = samples[static_cast<std::size_t>(i)].weight;
+    bin_x[bin] += rx[i] * weight;
+    bin_y[bin] += ry[i] * weight;
+  }
+  for (int k = 0; k < kOrientationWindowBins; ++k) {
+    bin_x[kOrientationBins + k] = bin_x[k];
+    bin_y[kOrientationBins + k] = bin_y[k];
+  }
+  // Every window's sum from 0 in the same order, the windows side by side.
+  std::array<float, kOrientationBins> sums_x{}, sums_y{};
+  for (int k = 0; k < kOrientationWindowBins; ++k) {
+    for (int start = 0; start < kOrientationBins; ++start) {
+      sums_x[start] += bin_x[start + k];
+      sums_y[start] += bin_y[start + k];
+    }
   }
   float best_x = 0, best_y = 0, best_norm = 0;
   for (int start = 0; start < kOrientationBins; ++start) {
-    float sum_x = 0, sum_y = 0;
-    for (int k = 0; k < kOrientationWindowBins; ++k) {
-      const int bin = (start + k) % kOrientationBins;
-      sum_x += bin_x[bin];
-      sum_y += bin_y[bin];
-    }
+    const float sum_x = sums_x[start], sum_y = sums_y[start];
     const float norm = sum_x * sum_x + sum_y * sum_y;
     if (norm > best_norm) {
       best_norm = norm;

@@ -16,6 +16,11 @@ constexpr int kSurfDescriptorDim = 64;
 // the longest summed vector gives the angle. Angles follow image axes (y down), as OpenCV's.
 float surfOrientation(const IntegralImage& integral, const cv::KeyPoint& keypoint);
 
+// The orientation histogram's bin (0..71, 5 degrees each) of `count` Haar responses: that of
+// atan2f(ry, rx) + pi in float, as written, for each; -1 for a response (0, 0), which has none.
+// Only responses near a bin's edge call atan2f.
+void surfOrientationBins(const float* rx, const float* ry, int count, int* bins);
+
 // The 64-d descriptor: a 20s x 20s window turned to keypoint.angle (angle < 0: upright),
 // split into 4 x 4 sub-regions of 5 x 5 samples; Haar responses of side 2s, Gaussian weighted
 // (sigma 3.3s) and expressed along the window's axes, give (sum dx, sum dy, sum |dx|, sum |dy|)

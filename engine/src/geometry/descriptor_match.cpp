@@ -6,9 +6,8 @@
 #include <limits>
 #include <opencv2/core/hal/hal.hpp>
 #include <utility>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
+
+#include "geometry/descriptor_dots.h"
 #if defined(__GNUC__) && defined(__x86_64__)
 #include <immintrin.h>
 #endif
@@ -28,81 +27,6 @@ constexpr double kAbsoluteSlack = 1e-20;
 // Beyond this length a float square can overflow: such rows are compared in full.
 constexpr double kLargestNorm = 1e15;
 
-// Exact integer sums: |code| <= levels on both sides and dim * levels_q * levels_c < 2^31, so
-// no order of summation can overflow or round, and every instruction set gives the same sums.
-std::int32_t dot(const std::int16_t* a, const std::int16_t* b, int n) {
-  std::int32_t s = 0;
-  for (int k = 0; k < n; ++k) s += static_cast<std::int32_t>(a[k]) * b[k];
-  return s;
-}
-
-#if defined(__GNUC__) && defined(__x86_64__)
-#define PLACEDB_DOTS_AVX2 1
-// Twice the SSE2 loop's width where the CPU has it; the sums are exact integers either way.
-__attribute__((target("avx2"))) int dotsAvx2(const std::int16_t* q, const std::int16_t* c, int rows,
-                                             int dim, std::int32_t* out) {
-  const std::size_t stride = static_cast<std::size_t>(dim);
-  int r = 0;
-  for (; r + 4 <= rows; r += 4) {
-    const std::int16_t* c0 = c + static_cast<std::size_t>(r) * stride;
-    __m256i s0 = _mm256_setzero_si256(), s1 = s0, s2 = s0, s3 = s0;
-    const std::int16_t *c1 = c0 + stride, *c2 = c1 + stride, *c3 = c2 + stride;
-    for (int k = 0; k < dim; k += 16) {
-      const __m256i qv = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(q + k));
-      // (A lambda would not inherit the target attribute.)
-      s0 = _mm256_add_epi32(
-          s0, _mm256_madd_epi16(qv, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c0 + k))));
-      s1 = _mm256_add_epi32(
-          s1, _mm256_madd_epi16(qv, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c1 + k))));
-      s2 = _mm256_add_epi32(
-          s2, _mm256_madd_epi16(qv, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c2 + k))));
-      s3 = _mm256_add_epi32(
-          s3, _mm256_madd_epi16(qv, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(c3 + k))));
-    }
-    // Pairwise adds leave each half with the four rows' partial sums; the halves add up.
-    const __m256i t = _mm256_hadd_epi32(_mm256_hadd_epi32(s0, s1), _mm256_hadd_epi32(s2, s3));
-    const __m128i sum = _mm_add_epi32(_mm256_castsi256_si128(t), _mm256_extracti128_si256(t, 1));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + r), sum);
-  }
-  return r;
-}
-#endif
-
-// The dot products of one query row with `rows` consecutive candidate rows.
-void dots(const std::int16_t* q, const std::int16_t* c, int rows, int dim, std::int32_t* out) {
-  int r = 0;
-#if defined(PLACEDB_DOTS_AVX2)
-  static const bool avx2 = __builtin_cpu_supports("avx2");
-  if (avx2 && dim % 16 == 0) r = dotsAvx2(q, c, rows, dim, out);
-#endif
-#if defined(__SSE2__)
-  // Four candidate rows at a time share each load of the query and one final reduction.
-  if (dim % 8 == 0) {
-    const std::size_t stride = static_cast<std::size_t>(dim);
-    for (; r + 4 <= rows; r += 4) {
-      const std::int16_t* c0 = c + static_cast<std::size_t>(r) * stride;
-      __m128i s0 = _mm_setzero_si128(), s1 = s0, s2 = s0, s3 = s0;
-      for (int k = 0; k < dim; k += 8) {
-        const __m128i qv = _mm_loadu_si128(reinterpret_cast<const __m128i*>(q + k));
-        const auto at = [&](std::size_t row) {
-          return _mm_loadu_si128(reinterpret_cast<const __m128i*>(c0 + row * stride + k));
-        };
-        s0 = _mm_add_epi32(s0, _mm_madd_epi16(qv, at(0)));
-        s1 = _mm_add_epi32(s1, _mm_madd_epi16(qv, at(1)));
-        s2 = _mm_add_epi32(s2, _mm_madd_epi16(qv, at(2)));
-        s3 = _mm_add_epi32(s3, _mm_madd_epi16(qv, at(3)));
-      }
-      // Transpose-and-add: lane i of the result is the sum of s_i's four lanes.
-      const __m128i t01 = _mm_add_epi32(_mm_unpacklo_epi32(s0, s1), _mm_unpackhi_epi32(s0, s1));
-      const __m128i t23 = _mm_add_epi32(_mm_unpacklo_epi32(s2, s3), _mm_unpackhi_epi32(s2, s3));
-      const __m128i sum = _mm_add_epi32(_mm_unpacklo_epi64(t01, t23), _mm_unpackhi_epi64(t01, t23));
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(out + r), sum);
-    }
-  }
-#endif
-  for (; r < rows; ++r) out[r] = dot(q, c + static_cast<std::size_t>(r) * dim, dim);
-}
-
 // Keeps the two smallest values seen in (first, second).
 void offer(double v, double& first, double& second) {
   second = std::min(second, std::max(first, v));
@@ -112,12 +36,12 @@ void offer(double v, double& first, double& second) {
 // The two smallest values (with repeats), without branches: the candidates' order is
 // unpredictable. Four independent chains, merged at the end, keep the dependency on the
 // previous value from setting the pace.
-std::pair<double, double> twoSmallest(const std::vector<double>& values) {
+std::pair<double, double> twoSmallest(const double* values, int count) {
   double first[4] = {kInf, kInf, kInf, kInf}, second[4] = {kInf, kInf, kInf, kInf};
-  std::size_t i = 0;
-  for (; i + 4 <= values.size(); i += 4)
+  int i = 0;
+  for (; i + 4 <= count; i += 4)
     for (int lane = 0; lane < 4; ++lane) offer(values[i + lane], first[lane], second[lane]);
-  for (; i < values.size(); ++i) offer(values[i], first[0], second[0]);
+  for (; i < count; ++i) offer(values[i], first[0], second[0]);
   // The two smallest of all are among each chain's two smallest.
   double a1 = kInf, a2 = kInf;
   for (int lane = 0; lane < 4; ++lane) {
@@ -127,14 +51,64 @@ std::pair<double, double> twoSmallest(const std::vector<double>& values) {
   return {a1, a2};
 }
 
+// Every candidate's squared distance between the codes' vectors, (|q|^2 + |c|^2) - 2 q.c, and
+// the two smallest of them.
+std::pair<double, double> codeDistances(double q_norm_sq, double q_unit2, const double* c_norm_sq,
+                                        const double* c_unit, const std::int32_t* products,
+                                        int count, double* out) {
+  for (int c = 0; c < count; ++c)
+    out[c] = q_norm_sq + c_norm_sq[c] - q_unit2 * c_unit[c] * products[c];
+  return twoSmallest(out, count);
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#define PLACEDB_CODE_DISTANCES_AVX2 1
+// The same, four candidates at a time: the same operations on each, so the same values (AVX2
+// alone has no fused multiply-add to round differently), and four chains of the two smallest.
+__attribute__((target("avx2"))) std::pair<double, double> codeDistancesAvx2(
+    double q_norm_sq, double q_unit2, const double* c_norm_sq, const double* c_unit,
+    const std::int32_t* products, int count, double* out) {
+  const __m256d q_sq = _mm256_set1_pd(q_norm_sq), q_u2 = _mm256_set1_pd(q_unit2);
+  __m256d first = _mm256_set1_pd(kInf), second = first;
+  int c = 0;
+  for (; c + 4 <= count; c += 4) {
+    const __m256d product =
+        _mm256_cvtepi32_pd(_mm_loadu_si128(reinterpret_cast<const __m128i*>(products + c)));
+    const __m256d scaled = _mm256_mul_pd(_mm256_mul_pd(q_u2, _mm256_loadu_pd(c_unit + c)), product);
+    const __m256d v = _mm256_sub_pd(_mm256_add_pd(q_sq, _mm256_loadu_pd(c_norm_sq + c)), scaled);
+    _mm256_storeu_pd(out + c, v);
+    second = _mm256_min_pd(second, _mm256_max_pd(first, v));
+    first = _mm256_min_pd(first, v);
+  }
+  double firsts[4], seconds[4];
+  _mm256_storeu_pd(firsts, first);
+  _mm256_storeu_pd(seconds, second);
+  double a1 = kInf, a2 = kInf;
+  for (int lane = 0; lane < 4; ++lane) {
+    offer(firsts[lane], a1, a2);
+    offer(seconds[lane], a1, a2);
+  }
+  for (; c < count; ++c) {
+    out[c] = q_norm_sq + c_norm_sq[c] - q_unit2 * c_unit[c] * products[c];
+    offer(out[c], a1, a2);
+  }
+  return {a1, a2};
+}
+#endif
+
 // A row's values as the full comparison sees them: the float rows, or the stored codes decoded
 // with decodeDescriptors()'s own expression.
 const float* valuesOf(const DescriptorSide& side, int row, float* buffer) {
   if (side.values && !side.values->empty()) return side.values->ptr<float>(row);
   const DescriptorCodes& c = *side.codes;
-  const std::int16_t* code = c.codes.data() + static_cast<std::size_t>(row) * c.dim;
   const float scale = c.stored_scale[static_cast<std::size_t>(row)];
-  for (int k = 0; k < c.dim; ++k) buffer[k] = static_cast<float>(code[k]) * scale / 127.f;
+  if (!c.codes.empty()) {
+    const std::int16_t* code = c.codes.data() + static_cast<std::size_t>(row) * c.dim;
+    for (int k = 0; k < c.dim; ++k) buffer[k] = static_cast<float>(code[k]) * scale / 127.f;
+  } else {
+    blockedRow(c.blocked.data(), c.dim, row, buffer);  // the codes, exactly, as floats
+    for (int k = 0; k < c.dim; ++k) buffer[k] = buffer[k] * scale / 127.f;
+  }
   return buffer;
 }
 
@@ -237,7 +211,7 @@ DescriptorCodes storedDescriptorCodes(const std::vector<std::uint8_t>& bytes, in
   out.dim = dim;
   out.levels = 127;  // an int8 code can be -128 too, but encodeDescriptors never writes it
   out.stored = true;
-  out.codes.resize(static_cast<std::size_t>(out.rows) * dim);
+  std::vector<std::int16_t> codes(static_cast<std::size_t>(out.rows) * dim);
   out.unit.resize(static_cast<std::size_t>(out.rows));
   out.norm.resize(static_cast<std::size_t>(out.rows));
   out.error.resize(static_cast<std::size_t>(out.rows));
@@ -246,7 +220,7 @@ DescriptorCodes storedDescriptorCodes(const std::vector<std::uint8_t>& bytes, in
     const std::uint8_t* in = bytes.data() + static_cast<std::size_t>(r) * row_bytes;
     float scale = 0.f;
     std::memcpy(&scale, in, sizeof(float));
-    std::int16_t* code = out.codes.data() + static_cast<std::size_t>(r) * dim;
+    std::int16_t* code = codes.data() + static_cast<std::size_t>(r) * dim;
     double sum = 0;
     bool in_range = true;
     for (int k = 0; k < dim; ++k) {
@@ -262,6 +236,12 @@ DescriptorCodes storedDescriptorCodes(const std::vector<std::uint8_t>& bytes, in
     // The decode's float multiply and divide each round to 2^-24 of the value: a bound well
     // under the matcher's slack. Bytes from elsewhere (NaN scale, -128) are compared in full.
     out.error[i] = std::isfinite(scale) && in_range ? 0.0 : kInf;
+  }
+  // A stored location is only ever a candidate: its codes are kept in the candidate layout alone.
+  if (dim % 2 == 0) {
+    out.blocked = blockCodes(codes.data(), out.rows, dim);
+  } else {
+    out.codes = std::move(codes);
   }
   return out;
 }
@@ -287,10 +267,14 @@ std::vector<RatioMatch> ratioMatches(const DescriptorSide& query, const Descript
   const DescriptorCodes* qc = query.codes;
   const DescriptorCodes* cc = candidate.codes;
   const bool usable = qc && cc && qc->rows == nq && cc->rows == nc && qc->dim == dim &&
-                      cc->dim == dim &&
+                      cc->dim == dim && dim % 2 == 0 && !qc->codes.empty() &&
+                      (!cc->blocked.empty() || !cc->codes.empty()) &&
                       static_cast<std::int64_t>(dim) * qc->levels * cc->levels <
                           std::numeric_limits<std::int32_t>::max();
   if (!usable || nq < 2 || nc < 2) return ratioMatchesBruteForce(query, candidate, ratio_sq);
+  std::vector<std::int16_t> own_blocks;  // a candidate made by quantiseDescriptors()
+  if (cc->blocked.empty()) own_blocks = blockCodes(cc->codes.data(), nc, dim);
+  const std::int16_t* blocked = cc->blocked.empty() ? own_blocks.data() : cc->blocked.data();
 
   // The candidate side's worst case, for every pair alike.
   double c_error = 0, c_norm = 0;
@@ -306,7 +290,10 @@ std::vector<RatioMatch> ratioMatches(const DescriptorSide& query, const Descript
 
   std::vector<RatioMatch> out;
   std::vector<double> approx(static_cast<std::size_t>(nc));
-  std::vector<std::int32_t> products(static_cast<std::size_t>(nc));
+  // Products of kDotQueryRows query rows at a time, a row of `stride` each.
+  const std::size_t stride =
+      static_cast<std::size_t>((nc + kDotBlockRows - 1) / kDotBlockRows * kDotBlockRows);
+  std::vector<std::int32_t> products(stride * kDotQueryRows);
   std::vector<int> which;
   which.reserve(static_cast<std::size_t>(nc));
   std::vector<float> q_buffer(static_cast<std::size_t>(dim));
@@ -317,6 +304,10 @@ std::vector<RatioMatch> ratioMatches(const DescriptorSide& query, const Descript
   };
   for (int q = 0; q < nq; ++q) {
     const std::size_t qi = static_cast<std::size_t>(q);
+    if (q % kDotQueryRows == 0)
+      codeDots(qc->codes.data() + qi * static_cast<std::size_t>(dim),
+               std::min(kDotQueryRows, nq - q), blocked, nc, dim, products.data(), stride);
+    const std::int32_t* product = products.data() + (q % kDotQueryRows) * stride;
     RatioMatch m;
     m.query = q;
     const float* q_values = valuesOf(query, q, q_buffer.data());
@@ -326,14 +317,17 @@ std::vector<RatioMatch> ratioMatches(const DescriptorSide& query, const Descript
       continue;
     }
     // Squared distances between the codes' vectors, and the two smallest.
-    const std::int16_t* q_code = qc->codes.data() + qi * static_cast<std::size_t>(dim);
     const double q_norm_sq = qc->norm[qi] * qc->norm[qi], q_unit2 = 2.0 * qc->unit[qi];
-    dots(q_code, cc->codes.data(), nc, dim, products.data());
-    for (int c = 0; c < nc; ++c) {
-      const std::size_t ci = static_cast<std::size_t>(c);
-      approx[ci] = q_norm_sq + c_norm_sq[ci] - q_unit2 * cc->unit[ci] * products[ci];
-    }
-    const auto [a1, a2] = twoSmallest(approx);
+#if defined(PLACEDB_CODE_DISTANCES_AVX2)
+    static const bool avx2 = __builtin_cpu_supports("avx2");
+    const auto [a1, a2] = avx2 ? codeDistancesAvx2(q_norm_sq, q_unit2, c_norm_sq.data(),
+                                                   cc->unit.data(), product, nc, approx.data())
+                               : codeDistances(q_norm_sq, q_unit2, c_norm_sq.data(),
+                                               cc->unit.data(), product, nc, approx.data());
+#else
+    const auto [a1, a2] = codeDistances(q_norm_sq, q_unit2, c_norm_sq.data(), cc->unit.data(),
+                                        product, nc, approx.data());
+#endif
     // A pair's distance of the values lies within `h` of its codes' distance (the triangle
     // inequality, both roundings, float slack); `delta` is the double sum's own error.
     const double lengths = qc->norm[qi] + qc->error[qi] + c_norm + c_error;

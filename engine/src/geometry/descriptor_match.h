@@ -24,10 +24,13 @@ namespace placedb {
 
 struct DescriptorCodes {
   int rows = 0, dim = 0;
-  std::vector<std::int16_t> codes;  // rows x dim
-  std::vector<double> unit;         // per row: the value one code step stands for
-  std::vector<double> norm;         // per row: length of the codes' vector (code * unit)
-  std::vector<double> error;        // per row: bound on |values - codes' vector|; inf: unknown
+  std::vector<std::int16_t> codes;  // rows x dim; empty when only `blocked` holds them
+  // The same codes laid out for the candidate side (blockCodes(), descriptor_dots.h): what
+  // storedDescriptorCodes() keeps, for an even dim.
+  std::vector<std::int16_t> blocked;
+  std::vector<double> unit;   // per row: the value one code step stands for
+  std::vector<double> norm;   // per row: length of the codes' vector (code * unit)
+  std::vector<double> error;  // per row: bound on |values - codes' vector|; inf: unknown
   // Levels on each side of 0: codes run over [-levels, levels].
   int levels = 0;
   // Set when the values are exactly decodeDescriptors() of the codes (a stored location's

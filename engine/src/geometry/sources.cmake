@@ -1,5 +1,6 @@
 # Geometric verification: correspondences, the epipolar fit, the check's rules, relative pose.
 set(_placedb_geometry_sources
+  ${CMAKE_CURRENT_LIST_DIR}/descriptor_dots.cpp
   ${CMAKE_CURRENT_LIST_DIR}/descriptor_match.cpp
   ${CMAKE_CURRENT_LIST_DIR}/epipolar_fit.cpp
   ${CMAKE_CURRENT_LIST_DIR}/geometric_check.cpp

@@ -66,14 +66,56 @@ void KdForest::reserveSlots(std::size_t slots) {
     if (tree.leaf_of.size() < slots) tree.leaf_of.resize(slots, -1);
 }
 
-void KdForest::insert(std::uint32_t slot) {
-  reserveSlots(std::size_t(slot) + 1);
-  const float* v = store_->data(slot);
+void KdForest::insert(std::uint32_t slot) { insert(&slot, 1); }
+
+void KdForest::insert(const std::uint32_t* slots, std::size_t count) {
+  if (count == 0) return;
+  reserveSlots(std::size_t(*std::max_element(slots, slots + count)) + 1);
+  // Tree by tree: the trees share nothing, so this is the order of one slot at a time. The leaves
+  // are found for all slots first, several descents side by side (leavesOf); a leaf that a slot
+  // before this one split since is then descended further, as the splits only ever turned leaves
+  // into internal nodes.
+  std::vector<std::int32_t> leaves(count);
   for (std::uint32_t t = 0; t < trees_.size(); ++t) {
-    const std::int32_t leaf = leafOf(trees_[t], v);
-    placeInLeaf(trees_[t], slot, leaf);
-    if (trees_[t].buckets[static_cast<std::size_t>(leaf)].size() > std::size_t(leaf_size_))
-      trySplit(t, leaf);
+    Tree& tree = trees_[t];
+    leavesOf(tree, slots, count, leaves.data());
+    for (std::size_t i = 0; i < count; ++i) {
+      const float* v = store_->data(slots[i]);
+      std::int32_t leaf = leaves[i];
+      while (tree.nodes[static_cast<std::size_t>(leaf)].left >= 0) {
+        const Node& n = tree.nodes[static_cast<std::size_t>(leaf)];
+        leaf = v[n.dim] < n.value ? n.left : n.right;
+      }
+      placeInLeaf(tree, slots[i], leaf);
+      if (tree.buckets[static_cast<std::size_t>(leaf)].size() > std::size_t(leaf_size_))
+        trySplit(t, leaf);
+    }
+  }
+}
+
+void KdForest::leavesOf(const Tree& tree, const std::uint32_t* slots, std::size_t count,
+                        std::int32_t* leaves) const {
+  // Each descent waits on one node at a time: kGroup of them in turn keep as many loads in
+  // flight, each step asking for the node the next one reads.
+  constexpr std::size_t kGroup = 8;
+  for (std::size_t first = 0; first < count; first += kGroup) {
+    const std::size_t n = std::min(kGroup, count - first);
+    const float* v[kGroup];
+    for (std::size_t j = 0; j < n; ++j) {
+      v[j] = store_->data(slots[first + j]);
+      leaves[first + j] = 0;
+    }
+    for (bool moved = true; moved;) {
+      moved = false;
+      for (std::size_t j = 0; j < n; ++j) {
+        std::int32_t& node = leaves[first + j];
+        const Node& at = tree.nodes[static_cast<std::size_t>(node)];
+        if (at.left < 0) continue;
+        node = v[j][at.dim] < at.value ? at.left : at.right;
+        __builtin_prefetch(&tree.nodes[static_cast<std::size_t>(node)]);
+        moved = true;
+      }
+    }
   }
 }
 
@@ -242,121 +284,6 @@ void KdForest::applySplit(std::uint32_t tree_index, std::int32_t node_index, std
   tree.parent[static_cast<std::size_t>(right)] = node_index;
   for (std::uint32_t p : bucket) placeInLeaf(tree, p, store_->data(p)[dim] < value ? left : right);
   markChanged(tree, node_index);
-}
-
-namespace {
-
-// The points one search has compared: a small open-addressing set, so that searches keep no
-// state in the forest (several threads may search at once) and the marks stay in L1 cache.
-class VisitedSlots {
- public:
-  VisitedSlots() : keys_(kInitial, 0), mask_(kInitial - 1) {}
-  // True when `slot` was not in the set (it is now).
-  bool insert(std::uint32_t slot) {
-    if (2 * (count_ + 1) > keys_.size()) grow();
-    return place(slot + 1);
-  }
-
- private:
-  static constexpr std::size_t kInitial = 256;
-  std::size_t home(std::uint32_t key) const { return (key * 2654435761u) & mask_; }
-  bool place(std::uint32_t key) {
-    for (std::size_t i = home(key);; i = (i + 1) & mask_) {
-      if (keys_[i] == key) return false;
-      if (keys_[i] == 0) {
-        keys_[i] = key;
-        ++count_;
-        return true;
-      }
-    }
-  }
-  void grow() {
-    std::vector<std::uint32_t> old(keys_.size() * 2, 0);
-    old.swap(keys_);
-    mask_ = keys_.size() - 1;
-    count_ = 0;
-    for (std::uint32_t key : old)
-      if (key != 0) place(key);
-  }
-  std::vector<std::uint32_t> keys_;
-  std::size_t mask_;
-  std::size_t count_ = 0;
-};
-
-}  // namespace
-
-float squaredDistanceBelow(const float* a, const float* b, int dim, float bound) {
-  // Four partial sums let the compiler vectorise; their order is fixed, so results are identical
-  // on every run of the same binary. The total is checked every 16 dimensions: every partial
-  // sum is non-negative and float addition is monotone, so once the partial total exceeds the
-  // bound the full one does too, and stopping changes no comparison against the bound.
-  float s0 = 0, s1 = 0, s2 = 0, s3 = 0;
-  int i = 0;
-  while (i + 4 <= dim) {
-    const int block_end = std::min(dim - (dim - i) % 4, i + 16);
-    for (; i < block_end; i += 4) {
-      const float d0 = a[i] - b[i], d1 = a[i + 1] - b[i + 1];
-      const float d2 = a[i + 2] - b[i + 2], d3 = a[i + 3] - b[i + 3];
-      s0 += d0 * d0;
-      s1 += d1 * d1;
-      s2 += d2 * d2;
-      s3 += d3 * d3;
-    }
-    if (i + 4 <= dim && (s0 + s1) + (s2 + s3) > bound) return (s0 + s1) + (s2 + s3);
-  }
-  for (; i < dim; ++i) {
-    const float d = a[i] - b[i];
-    s0 += d * d;
-  }
-  return (s0 + s1) + (s2 + s3);
-}
-
-void KdForest::search(const float* query, std::size_t k, int checks,
-                      std::vector<Neighbor>* out) const {
-  out->clear();
-  if (k == 0) return;
-  const float inf = std::numeric_limits<float>::infinity();
-  auto worst = [&]() { return out->size() < k ? inf : out->back().dist2; };
-  std::priority_queue<Branch, std::vector<Branch>, std::greater<Branch>> branches;
-  VisitedSlots visited;
-  int compared = 0;
-  const std::size_t line_floats = 64 / sizeof(float);
-
-  // Walks down from a node to its leaf, queueing the far side of every split on the way.
-  auto descend = [&](std::uint32_t t, std::int32_t node, float bound) {
-    const Tree& tree = trees_[t];
-    while (tree.nodes[node].left >= 0) {
-      const Node& n = tree.nodes[node];
-      const float diff = query[n.dim] - n.value;
-      const std::int32_t near_child = diff < 0 ? n.left : n.right;
-      const std::int32_t far_child = diff < 0 ? n.right : n.left;
-      const float far_bound = bound + diff * diff;
-      if (far_bound <= worst()) branches.push({far_bound, t, far_child});
-      node = near_child;
-    }
-    const auto& bucket = tree.buckets[static_cast<std::size_t>(node)];
-    // The bucket's descriptors are scattered over the store: asking for all of them before the
-    // first is needed overlaps their cache misses.
-    for (std::uint32_t slot : bucket) {
-      const float* v = store_->data(slot);
-      for (std::size_t f = 0; f < std::size_t(dim_); f += line_floats) __builtin_prefetch(v + f);
-    }
-    for (std::uint32_t slot : bucket) {
-      if (!visited.insert(slot)) continue;
-      ++compared;
-      const float bound_now = worst();
-      const float d2 = squaredDistanceBelow(query, store_->data(slot), dim_, bound_now);
-      if (d2 <= bound_now) offerNeighbor(out, k, {d2, store_->id(slot)});
-    }
-  };
-
-  for (std::uint32_t t = 0; t < trees_.size(); ++t) descend(t, 0, 0.f);
-  while (!branches.empty() && (compared < checks || out->size() < k)) {
-    const Branch b = branches.top();
-    branches.pop();
-    if (b.bound > worst()) continue;
-    descend(b.tree, b.node, b.bound);
-  }
 }
 
 }  // namespace placedb::vocab

@@ -91,6 +91,8 @@ class KdForest {
   KdForest(const SlotStore* store, int trees, int leaf_size, std::uint64_t seed);
 
   void insert(std::uint32_t slot);
+  // insert() of each slot in turn, with their descents side by side.
+  void insert(const std::uint32_t* slots, std::size_t count);
   // Room for slots [0, slots) before a BackgroundFill, whose threads must not grow the tables.
   void reserveSlots(std::size_t slots);
   // Used by restore, fed run by run while the caller still loads descriptors: the loaded nodes
@@ -124,6 +126,10 @@ class KdForest {
   // and k neighbours are known, never visiting a branch whose bound exceeds the k-th distance.
   // Safe to call from several threads at once while nothing modifies the forest.
   void search(const float* query, std::size_t k, int checks, std::vector<Neighbor>* out) const;
+  // search() of `count` queries at once, outs[i] for queries[i]: one step of each in turn, so
+  // that each one's memory loads overlap the others' work. Each result is what search() gives.
+  void search(const float* const* queries, std::vector<Neighbor>* const* outs, std::size_t count,
+              std::size_t k, int checks) const;
 
   // Every internal node, by tree then node id.
   std::vector<ForestNode> internalNodes() const;
@@ -175,7 +181,14 @@ class KdForest {
     }
   };
 
+  struct Walk;  // one search between its steps (kd_forest_search.cpp)
+  void advance(Walk& walk, std::size_t k, int checks) const;
+  bool nextDescent(Walk& walk, std::size_t k, int checks) const;
+
   std::int32_t leafOf(const Tree& tree, const float* v) const;
+  // leafOf() of each slot's descriptor into leaves[i].
+  void leavesOf(const Tree& tree, const std::uint32_t* slots, std::size_t count,
+                std::int32_t* leaves) const;
   void trySplit(std::uint32_t tree_index, std::int32_t node_index);
   void applySplit(std::uint32_t tree_index, std::int32_t node_index, std::uint16_t dim,
                   float value);

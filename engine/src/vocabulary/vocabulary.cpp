@@ -15,6 +15,10 @@ namespace placedb::vocab {
 
 namespace {
 
+// Features searched together, their steps interleaved (KdForest::search): enough to keep
+// several loads in flight, few enough that their marks and queues stay in L1 cache.
+constexpr int kSearchGroup = 8;
+
 void require(bool ok, const std::string& message) {
   if (!ok) throw Error(ErrorCode::kInvalidArgument, "vocabulary: " + message);
 }
@@ -90,10 +94,11 @@ bool Vocabulary::decideNewWord(const std::vector<Neighbor>& best) const {
   return nd > options_.t_nndr * inUnit(best[1].dist2);
 }
 
-void Vocabulary::addWord(std::int64_t id, std::int64_t created_frame, const float* descriptor) {
+std::uint32_t Vocabulary::storeWord(std::int64_t id, std::int64_t created_frame,
+                                    const float* descriptor) {
   const std::uint32_t slot = store_.add(id, created_frame, descriptor);
   slot_of_.set(id, slot);
-  forest_->insert(slot);
+  return slot;
 }
 
 Quantization Vocabulary::quantize(const cv::Mat& descriptors, std::int64_t frame_id) {
@@ -110,8 +115,19 @@ Quantization Vocabulary::quantize(const cv::Mat& descriptors, std::int64_t frame
   // ND, NND and nearest word of every feature against V_{t-1}.
   std::vector<std::vector<Neighbor>> best(m);
   const std::size_t k = options_.fixed ? 1 : 2;
-  parallelFor(m, resolveThreadCount(options_.threads),
-              [&](int i) { forest_->search(row(i), k, options_.checks, &best[i]); });
+  std::vector<const float*> queries(m);
+  std::vector<std::vector<Neighbor>*> outs(m);
+  for (int i = 0; i < m; ++i) {
+    queries[i] = row(i);
+    outs[i] = &best[i];
+  }
+  const int groups = (m + kSearchGroup - 1) / kSearchGroup;
+  parallelFor(groups, resolveThreadCount(options_.threads), [&](int g) {
+    const int first = g * kSearchGroup;
+    forest_->search(queries.data() + first, outs.data() + first,
+                    static_cast<std::size_t>(std::min(kSearchGroup, m - first)), k,
+                    options_.checks);
+  });
 
   if (options_.fixed) {
     double sum = 0;
@@ -160,9 +176,10 @@ Quantization Vocabulary::quantize(const cv::Mat& descriptors, std::int64_t frame
       q.distance_of_feature[i] = std::sqrt(top[0].dist2);
     }
   }
-  for (std::size_t w = 0; w < created_rows.size(); ++w) {
-    addWord(q.created_words[w], frame_id, row(created_rows[w]));
-  }
+  std::vector<std::uint32_t> slots(created_rows.size());
+  for (std::size_t w = 0; w < created_rows.size(); ++w)
+    slots[w] = storeWord(q.created_words[w], frame_id, row(created_rows[w]));
+  forest_->insert(slots.data(), slots.size());
   double sum = 0;
   for (float d : q.distance_of_feature) sum += d;
   q.mean_error = sum / m;
@@ -182,10 +199,12 @@ void Vocabulary::insert(const std::vector<std::int64_t>& ids, const cv::Mat& des
   }
   touched_ = true;
   const cv::Mat rows = descriptors.isContinuous() ? descriptors : descriptors.clone();
+  std::vector<std::uint32_t> slots(ids.size());
   for (std::size_t i = 0; i < ids.size(); ++i) {
-    addWord(ids[i], created_frames[i], rows.ptr<float>(int(i)));
+    slots[i] = storeWord(ids[i], created_frames[i], rows.ptr<float>(int(i)));
     next_word_id_ = std::max(next_word_id_, ids[i] + 1);
   }
+  forest_->insert(slots.data(), slots.size());
 }
 
 void Vocabulary::continueAt(std::int64_t next_word_id) {

@@ -155,7 +155,8 @@ class Vocabulary {
 
  private:
   void checkDescriptors(const cv::Mat& descriptors, const char* what) const;
-  void addWord(std::int64_t id, std::int64_t created_frame, const float* descriptor);
+  // A word's descriptor into the store, by id; the caller inserts its slot into the forest.
+  std::uint32_t storeWord(std::int64_t id, std::int64_t created_frame, const float* descriptor);
   bool decideNewWord(const std::vector<Neighbor>& best) const;
   float inUnit(float dist2) const;
 
