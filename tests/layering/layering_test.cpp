@@ -61,10 +61,12 @@ std::string roomOf(const std::string& include) {
 
 TEST(Layering, EveryRoomIsKnown) {
   const fs::path root = PLACEDB_ENGINE_SOURCE_DIR;
-  for (const auto& entry : fs::directory_iterator(root))
-    if (entry.is_directory())
+  for (const auto& entry : fs::directory_iterator(root)) {
+    if (entry.is_directory()) {
       EXPECT_TRUE(allowedRooms().count(entry.path().filename().string()))
           << entry.path() << " is a room this test does not place in the layers";
+    }
+  }
 }
 
 TEST(Layering, RoomsIncludeDownwardsOnly) {
@@ -82,9 +84,11 @@ TEST(Layering, RoomsIncludeDownwardsOnly) {
 }
 
 TEST(Layering, GeometryIsReachedThroughItsHeader) {
-  for (const Include& inc : engineIncludes(PLACEDB_ENGINE_SOURCE_DIR))
-    if (inc.room != "geometry" && roomOf(inc.target) == "geometry")
+  for (const Include& inc : engineIncludes(PLACEDB_ENGINE_SOURCE_DIR)) {
+    if (inc.room != "geometry" && roomOf(inc.target) == "geometry") {
       EXPECT_EQ(inc.target, "geometry/geometry.h") << inc.file;
+    }
+  }
 }
 
 }  // namespace
