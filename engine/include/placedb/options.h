@@ -115,7 +115,9 @@ struct Options {
 
   // --- running ---
   // Worker threads of feature extraction and quantisation, 0 = one per hardware thread. The
-  // work is split so that results never depend on it: any value gives the same decisions.
+  // work is split so that results never depend on it: any value gives the same decisions. The
+  // threads beside the caller's start on first use and stay for the life of the process, shared
+  // by every map in it (a forked child starts its own).
   int threads = 2;
 
   // --- camera intrinsics (optional) ---
