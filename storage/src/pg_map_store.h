@@ -196,9 +196,6 @@ class PgMapStore final : public MapStore {
   void sidePutState(const std::string& key, const void* data, std::size_t size);
   std::optional<std::vector<std::uint8_t>> sideGetState(const std::string& key) const;
   void sideDeleteState(const std::string& key);
-  void sideWriteKdNodes(const std::vector<KdNodeRecord>& upserts,
-                        const std::vector<std::pair<int, std::int64_t>>& deletions,
-                        bool replace_all);
   std::vector<KdNodeRecord> sideLoadKdNodes() const;
   void sidePutPosterior(const std::vector<std::int64_t>& ids,
                         const std::vector<double>& probabilities);

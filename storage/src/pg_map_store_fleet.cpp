@@ -227,67 +227,6 @@ void PgMapStore::sideDeleteState(const std::string& key) {
   scope.commit();
 }
 
-void PgMapStore::sideWriteKdNodes(const std::vector<KdNodeRecord>& upserts,
-                                  const std::vector<std::pair<int, std::int64_t>>& deletions,
-                                  bool replace_all) {
-  auto scope = writeScope();
-  std::int64_t rows = 0;
-  if (replace_all) {
-    db_->run("DELETE FROM session_kd_nodes WHERE session_id = $1",
-             detail::PgParams().add(side_session_));
-  } else {
-    rows = storedKdNodeRows();
-  }
-  if (!deletions.empty()) {
-    std::vector<std::int64_t> trees, nodes;
-    for (const auto& [tree, node] : deletions) {
-      trees.push_back(tree);
-      nodes.push_back(node);
-    }
-    rows -= db_->run(
-                   "DELETE FROM session_kd_nodes k USING unnest($2::int8[], $3::int8[]) AS d(t, "
-                   "n) WHERE k.session_id = $1 AND k.tree = d.t AND k.node = d.n",
-                   detail::PgParams().add(side_session_).addArray(trees).addArray(nodes))
-                .changed();
-  }
-  if (!upserts.empty()) {
-    // The last given wins, as in writeKdNodes.
-    std::map<std::pair<int, std::int64_t>, const KdNodeRecord*> last;
-    for (const KdNodeRecord& n : upserts) last[{n.tree, n.node}] = &n;
-    std::vector<std::int64_t> tree, node, left, right, dim, sum;
-    std::vector<double> value;
-    for (const auto& [key, n] : last) {
-      tree.push_back(n->tree);
-      node.push_back(n->node);
-      left.push_back(n->left_child);
-      right.push_back(n->right_child);
-      dim.push_back(n->split_dim);
-      value.push_back(n->split_value);
-      sum.push_back(detail::kdNodeChecksum(n->tree, n->node, n->left_child, n->right_child,
-                                           n->split_dim, n->split_value));
-    }
-    const auto r = db_->run(
-        "INSERT INTO session_kd_nodes (session_id, tree, node, left_child, right_child, "
-        "split_dim, split_value, checksum) SELECT $1, * FROM unnest($2::int8[], $3::int8[], "
-        "$4::int8[], $5::int8[], $6::int8[], $7::float8[], $8::int8[]) ON CONFLICT (session_id, "
-        "tree, node) DO UPDATE SET left_child = excluded.left_child, right_child = "
-        "excluded.right_child, split_dim = excluded.split_dim, split_value = "
-        "excluded.split_value, checksum = excluded.checksum RETURNING (xmax = 0)",
-        detail::PgParams()
-            .add(side_session_)
-            .addArray(tree)
-            .addArray(node)
-            .addArray(left)
-            .addArray(right)
-            .addArray(dim)
-            .addArray(value)
-            .addArray(sum));
-    for (int i = 0; i < r.rows(); ++i) rows += r.boolean(i, 0) ? 1 : 0;
-  }
-  putState(detail::kKdNodeRowsKey, std::to_string(rows));
-  scope.commit();
-}
-
 std::vector<KdNodeRecord> PgMapStore::sideLoadKdNodes() const {
   const auto r = db_->run(
       "SELECT tree, node, left_child, right_child, split_dim, split_value, checksum "

@@ -84,11 +84,19 @@ std::int64_t PgMapStore::storedKdNodeRows() const {
 void PgMapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
                               const std::vector<std::pair<int, std::int64_t>>& deletions,
                               bool replace_all) {
-  if (side_session_) return sideWriteKdNodes(upserts, deletions, replace_all);
+  // A side session keeps its nodes in session_kd_nodes, its id the first key and parameter; the
+  // statements are otherwise the main line's.
+  const bool side = side_session_ != 0;
+  auto params = [&] {
+    detail::PgParams p;
+    if (side) p.add(side_session_);
+    return p;
+  };
   auto scope = writeScope();
   std::int64_t rows = 0;
   if (replace_all) {
-    db_->run("DELETE FROM kd_nodes");
+    db_->run(side ? "DELETE FROM session_kd_nodes WHERE session_id = $1" : "DELETE FROM kd_nodes",
+             params());
   } else {
     rows = storedKdNodeRows();
   }
@@ -98,10 +106,11 @@ void PgMapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
       trees.push_back(tree);
       nodes.push_back(node);
     }
-    rows -= db_->run(
-                   "DELETE FROM kd_nodes k USING unnest($1::int8[], $2::int8[]) AS d(t, n) "
-                   "WHERE k.tree = d.t AND k.node = d.n",
-                   detail::PgParams().addArray(trees).addArray(nodes))
+    rows -= db_->run(side ? "DELETE FROM session_kd_nodes k USING unnest($2::int8[], $3::int8[]) "
+                            "AS d(t, n) WHERE k.session_id = $1 AND k.tree = d.t AND k.node = d.n"
+                          : "DELETE FROM kd_nodes k USING unnest($1::int8[], $2::int8[]) AS d(t, "
+                            "n) WHERE k.tree = d.t AND k.node = d.n",
+                     params().addArray(trees).addArray(nodes))
                 .changed();
   }
   if (!upserts.empty()) {
@@ -123,13 +132,19 @@ void PgMapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
     }
     // xmax is 0 on a row this statement inserted: the row count follows without a count(*).
     const auto r = db_->run(
-        "INSERT INTO kd_nodes (tree, node, left_child, right_child, split_dim, split_value, "
-        "checksum) SELECT * FROM unnest($1::int8[], $2::int8[], $3::int8[], $4::int8[], "
-        "$5::int8[], $6::float8[], $7::int8[]) ON CONFLICT (tree, node) DO UPDATE SET "
-        "left_child = excluded.left_child, right_child = excluded.right_child, "
-        "split_dim = excluded.split_dim, split_value = excluded.split_value, "
-        "checksum = excluded.checksum RETURNING (xmax = 0)",
-        detail::PgParams()
+        side ? "INSERT INTO session_kd_nodes (session_id, tree, node, left_child, right_child, "
+               "split_dim, split_value, checksum) SELECT $1, * FROM unnest($2::int8[], "
+               "$3::int8[], $4::int8[], $5::int8[], $6::int8[], $7::float8[], $8::int8[]) ON "
+               "CONFLICT (session_id, tree, node) DO UPDATE SET left_child = excluded.left_child, "
+               "right_child = excluded.right_child, split_dim = excluded.split_dim, split_value = "
+               "excluded.split_value, checksum = excluded.checksum RETURNING (xmax = 0)"
+             : "INSERT INTO kd_nodes (tree, node, left_child, right_child, split_dim, split_value, "
+               "checksum) SELECT * FROM unnest($1::int8[], $2::int8[], $3::int8[], $4::int8[], "
+               "$5::int8[], $6::float8[], $7::int8[]) ON CONFLICT (tree, node) DO UPDATE SET "
+               "left_child = excluded.left_child, right_child = excluded.right_child, "
+               "split_dim = excluded.split_dim, split_value = excluded.split_value, "
+               "checksum = excluded.checksum RETURNING (xmax = 0)",
+        params()
             .addArray(tree)
             .addArray(node)
             .addArray(left)
