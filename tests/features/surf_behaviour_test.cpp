@@ -10,6 +10,7 @@
 
 #include "features/feature_extractor.h"
 #include "features/image_conversion.h"
+#include "features/integral_image.h"
 #include "features/surf_descriptor.h"
 #include "test_paths.h"
 
@@ -220,6 +221,52 @@ TEST(SurfBehaviour, OrientationBinsAreAtan2fsOnEveryResponse) {
                     << expected;
   }
   EXPECT_EQ(wrong, 0);
+}
+
+TEST(SurfBehaviour, HaarResponsesAreTheClampedBoxSumsEverywhere) {
+  // Centres inside, on and beyond every border, at small and large sides, in runs long enough
+  // for the eight-wide path and with tails for the one-at-a-time path.
+  const IntegralImage integral(testImage());
+  const int w = integral.width(), h = integral.height();
+  cv::RNG rng(11);
+  for (int half : {1, 2, 3, 7, 20}) {
+    std::vector<int> a, b;
+    for (int i = 0; i < 1003; ++i) {
+      a.push_back(rng.uniform(-half - 3, w + half + 4));
+      b.push_back(rng.uniform(-half - 3, h + half + 4));
+    }
+    std::vector<float> rx(a.size()), ry(a.size());
+    surfHaarResponses(integral, a.data(), b.data(), static_cast<int>(a.size()), half, rx.data(),
+                      ry.data());
+    int wrong = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      const int x = a[i], y = b[i];
+      const int right = integral.boxSumClamped(x, y - half, x + half, y + half);
+      const int left = integral.boxSumClamped(x - half, y - half, x, y + half);
+      const int bottom = integral.boxSumClamped(x - half, y, x + half, y + half);
+      const int top = integral.boxSumClamped(x - half, y - half, x + half, y);
+      if ((rx[i] != static_cast<float>(right - left) ||
+           ry[i] != static_cast<float>(bottom - top)) &&
+          ++wrong <= 5) {
+        ADD_FAILURE() << "half " << half << " at (" << x << ", " << y << "): (" << rx[i] << ", "
+                      << ry[i] << "), boxes give (" << right - left << ", " << bottom - top << ")";
+      }
+    }
+    EXPECT_EQ(wrong, 0) << "half " << half;
+  }
+}
+
+TEST(SurfBehaviour, AnImageOfAnotherSizeInBetweenChangesNoBit) {
+  // The detector keeps its buffers from one image to the next.
+  const cv::Mat image = testImage();
+  const Features first = surfOf(image);
+  cv::Mat small, large;
+  cv::resize(image, small, cv::Size(), 0.5, 0.5, cv::INTER_AREA);
+  cv::resize(image, large, cv::Size(), 1.5, 1.5, cv::INTER_LINEAR);
+  ASSERT_GT(surfOf(small).size(), 0u);
+  EXPECT_TRUE(bitIdentical(first, surfOf(image)));
+  ASSERT_GT(surfOf(large).size(), 0u);
+  EXPECT_TRUE(bitIdentical(first, surfOf(image)));
 }
 
 TEST(SurfBehaviour, FlatImageGivesNoFeatures) {

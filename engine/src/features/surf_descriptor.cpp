@@ -6,6 +6,9 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 #include "features/parallel_for.h"
 
@@ -53,6 +56,56 @@ void haarResponses(const IntegralImage& integral, int a, int b, int half, float&
   rx = static_cast<float>(static_cast<std::int32_t>(right - left));
   ry = static_cast<float>(static_cast<std::int32_t>(bottom - top));
 }
+
+// haarResponses() of `count` centres (a[i], b[i]), all of side 2 * half.
+void haarResponsesOf(const IntegralImage& integral, const int* a, const int* b, int count, int half,
+                     float* rx, float* ry) {
+  for (int i = 0; i < count; ++i) haarResponses(integral, a[i], b[i], half, rx[i], ry[i]);
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#define PLACEDB_HAAR_AVX2 1
+__attribute__((target("avx2"))) inline __m256i clampTo(__m256i v, __m256i high) {
+  return _mm256_min_epi32(_mm256_max_epi32(v, _mm256_setzero_si256()), high);
+}
+
+// The same, eight centres at a time with AVX2 gathers: the same integer sums, so the same
+// responses. Clamping a corner that lies inside the image leaves it as it is, so every corner
+// is clamped here, where haarResponses() clamps only boxes that leave the image.
+__attribute__((target("avx2"))) void haarResponsesAvx2(const IntegralImage& integral, const int* a,
+                                                       const int* b, int count, int half, float* rx,
+                                                       float* ry) {
+  const int* table = reinterpret_cast<const int*>(integral.data());
+  const __m256i halves = _mm256_set1_epi32(half);
+  const __m256i width = _mm256_set1_epi32(integral.width());
+  const __m256i height = _mm256_set1_epi32(integral.height());
+  const __m256i stride = _mm256_set1_epi32(integral.stride());
+  int i = 0;
+  for (; i + 8 <= count; i += 8) {
+    const __m256i ca = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(a + i));
+    const __m256i cb = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(b + i));
+    const __m256i x[3] = {clampTo(_mm256_sub_epi32(ca, halves), width), clampTo(ca, width),
+                          clampTo(_mm256_add_epi32(ca, halves), width)};
+    __m256i row[3] = {clampTo(_mm256_sub_epi32(cb, halves), height), clampTo(cb, height),
+                      clampTo(_mm256_add_epi32(cb, halves), height)};
+    for (__m256i& r : row) r = _mm256_mullo_epi32(r, stride);
+#define PLACEDB_HAAR_CORNER(xi, yj) \
+  _mm256_i32gather_epi32(table, _mm256_add_epi32(row[yj], x[xi]), 4)
+    const __m256i t00 = PLACEDB_HAAR_CORNER(0, 0), t10 = PLACEDB_HAAR_CORNER(1, 0);
+    const __m256i t20 = PLACEDB_HAAR_CORNER(2, 0), t01 = PLACEDB_HAAR_CORNER(0, 1);
+    const __m256i t21 = PLACEDB_HAAR_CORNER(2, 1), t02 = PLACEDB_HAAR_CORNER(0, 2);
+    const __m256i t12 = PLACEDB_HAAR_CORNER(1, 2), t22 = PLACEDB_HAAR_CORNER(2, 2);
+#undef PLACEDB_HAAR_CORNER
+    const __m256i left = _mm256_add_epi32(_mm256_sub_epi32(_mm256_sub_epi32(t12, t02), t10), t00);
+    const __m256i right = _mm256_add_epi32(_mm256_sub_epi32(_mm256_sub_epi32(t22, t12), t20), t10);
+    const __m256i top = _mm256_add_epi32(_mm256_sub_epi32(_mm256_sub_epi32(t21, t01), t20), t00);
+    const __m256i bottom = _mm256_add_epi32(_mm256_sub_epi32(_mm256_sub_epi32(t22, t02), t21), t01);
+    _mm256_storeu_ps(rx + i, _mm256_cvtepi32_ps(_mm256_sub_epi32(right, left)));
+    _mm256_storeu_ps(ry + i, _mm256_cvtepi32_ps(_mm256_sub_epi32(bottom, top)));
+  }
+  haarResponsesOf(integral, a + i, b + i, count - i, half, rx + i, ry + i);
+}
+#endif
 
 struct OrientationSample {
   int i, j;
@@ -174,6 +227,18 @@ int orientationBin(double position, float rx, float ry) {
 
 }  // namespace
 
+void surfHaarResponses(const IntegralImage& integral, const int* a, const int* b, int count,
+                       int half, float* rx, float* ry) {
+#if defined(PLACEDB_HAAR_AVX2)
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2) {
+    haarResponsesAvx2(integral, a, b, count, half, rx, ry);
+    return;
+  }
+#endif
+  haarResponsesOf(integral, a, b, count, half, rx, ry);
+}
+
 void surfOrientationBins(const float* rx, const float* ry, int count, int* bins) {
   constexpr int kBlock = 64;
   double positions[kBlock];
@@ -192,12 +257,14 @@ float surfOrientation(const IntegralImage& integral, const cv::KeyPoint& keypoin
   const int half = std::max(1, static_cast<int>(std::lround(2.0f * s)));  // side 4s
   const std::vector<OrientationSample>& samples = orientationSamples();
   const int count = static_cast<int>(samples.size());
-  std::array<float, kOrientationSamplesMax> rx, ry;
+  std::array<int, kOrientationSamplesMax> a, b;
   for (int i = 0; i < count; ++i) {
     const OrientationSample& sample = samples[static_cast<std::size_t>(i)];
-    haarResponses(integral, nearestBoundary(keypoint.pt.x + sample.i * s),
-                  nearestBoundary(keypoint.pt.y + sample.j * s), half, rx[i], ry[i]);
+    a[i] = nearestBoundary(keypoint.pt.x + sample.i * s);
+    b[i] = nearestBoundary(keypoint.pt.y + sample.j * s);
   }
+  std::array<float, kOrientationSamplesMax> rx, ry;
+  surfHaarResponses(integral, a.data(), b.data(), count, half, rx.data(), ry.data());
   std::array<int, kOrientationSamplesMax> bins;
   surfOrientationBins(rx.data(), ry.data(), count, bins.data());
   // The bins and their window sums, each in the order of the straightforward loops. The bins
@@ -244,19 +311,26 @@ void surfDescriptor(const IntegralImage& integral, const cv::KeyPoint& keypoint,
   const float theta = keypoint.angle < 0 ? 0.0f : keypoint.angle * (kPi / 180.0f);
   const float cos_t = std::cos(theta), sin_t = std::sin(theta);
   const auto& weights = descriptorWeights();
-  std::fill(out, out + kSurfDescriptorDim, 0.0f);
+  constexpr int kSamples = kDescriptorSamples * kDescriptorSamples;
+  std::array<int, kSamples> a, b;
   for (int m = 0; m < kDescriptorSamples; ++m) {
     const float v = m - (kDescriptorSamples - 1) / 2.0f;
     for (int k = 0; k < kDescriptorSamples; ++k) {
       const float u = k - (kDescriptorSamples - 1) / 2.0f;
       // Sample (u, v) of the turned window, in image pixels.
-      const float x = keypoint.pt.x + s * (u * cos_t - v * sin_t);
-      const float y = keypoint.pt.y + s * (u * sin_t + v * cos_t);
-      float rx, ry;
-      haarResponses(integral, nearestBoundary(x), nearestBoundary(y), half, rx, ry);
-      const float weight = weights[m * kDescriptorSamples + k];
-      const float du = (rx * cos_t + ry * sin_t) * weight;
-      const float dv = (-rx * sin_t + ry * cos_t) * weight;
+      a[m * kDescriptorSamples + k] = nearestBoundary(keypoint.pt.x + s * (u * cos_t - v * sin_t));
+      b[m * kDescriptorSamples + k] = nearestBoundary(keypoint.pt.y + s * (u * sin_t + v * cos_t));
+    }
+  }
+  std::array<float, kSamples> rx, ry;
+  surfHaarResponses(integral, a.data(), b.data(), kSamples, half, rx.data(), ry.data());
+  std::fill(out, out + kSurfDescriptorDim, 0.0f);
+  for (int m = 0; m < kDescriptorSamples; ++m) {
+    for (int k = 0; k < kDescriptorSamples; ++k) {
+      const int i = m * kDescriptorSamples + k;
+      const float weight = weights[i];
+      const float du = (rx[i] * cos_t + ry[i] * sin_t) * weight;
+      const float dv = (-rx[i] * sin_t + ry[i] * cos_t) * weight;
       float* cell = out + 4 * ((m / kSamplesPerSubregion) * 4 + k / kSamplesPerSubregion);
       cell[0] += du;
       cell[1] += dv;

@@ -10,6 +10,12 @@ namespace placedb {
 
 constexpr int kSurfDescriptorDim = 64;
 
+// Haar wavelet responses of side 2 * half centred on integral-table coordinates (a[i], b[i]):
+// right minus left half (rx[i]) and bottom minus top half (ry[i]), each box clamped to the
+// image. Eight at a time with AVX2 where the processor has it; the same integer sums either way.
+void surfHaarResponses(const IntegralImage& integral, const int* a, const int* b, int count,
+                       int half, float* rx, float* ry);
+
 // Dominant orientation in degrees [0, 360) of a blob (keypoint.size = filter side, scale
 // s = 1.2 * size / 9): Haar responses of side 4s at samples s apart within radius 6s, Gaussian
 // weighted (sigma 2s), summed in a sliding 60-degree window (72 positions, 5 degrees apart);
