@@ -6,6 +6,9 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 #include "features/parallel_for.h"
 
@@ -35,7 +38,7 @@ struct ResponseLayer {
   int rows = 0, cols = 0;
   // Cells [first, last] (inclusive) in each direction are those where the filter fits.
   int first_col = 0, last_col = -1, first_row = 0, last_row = -1;
-  std::vector<float> det;  // rows x cols; zero where the filter does not fit
+  std::vector<float> det;  // rows x cols; undefined where the filter does not fit
 
   float at(int r, int c) const { return det[static_cast<std::size_t>(r) * cols + c]; }
 };
@@ -77,7 +80,9 @@ void makeLayer(const IntegralImage& integral, int octave, int layer, ResponseLay
   out.first_row = out.first_col;
   out.last_col = integral.width() - 1 - half >= 0 ? (integral.width() - 1 - half) / out.step : -1;
   out.last_row = integral.height() - 1 - half >= 0 ? (integral.height() - 1 - half) / out.step : -1;
-  out.det.assign(static_cast<std::size_t>(out.rows) * out.cols, 0.0f);
+  // Samples where the filter does not fit are never read (extrema need the largest filter of
+  // their octave to fit), so the buffer's earlier values may stay there.
+  out.det.resize(static_cast<std::size_t>(out.rows) * out.cols);
 }
 
 // The three box filters of one filter size, as offsets from the centre's integral entry.
@@ -127,44 +132,151 @@ const std::uint32_t* centreEntry(const IntegralImage& integral, int x, int y) {
   return integral.data() + static_cast<std::size_t>(y) * integral.stride() + x;
 }
 
-// Determinants of rows [row_begin, row_end) of one layer (those where its filter fits).
-__attribute__((always_inline)) inline void layerRows(const IntegralImage& integral,
-                                                     ResponseLayer& layer, int row_begin,
-                                                     int row_end) {
-  const HessianBoxes boxes(layer.filter_size, integral.stride());
-  const int r0 = std::max(row_begin, layer.first_row);
-  const int r1 = std::min(row_end - 1, layer.last_row);
-  for (int r = r0; r <= r1; ++r) {
-    float* out = &layer.det[static_cast<std::size_t>(r) * layer.cols];
-    for (int c = layer.first_col; c <= layer.last_col; ++c) {
-      float dxx, dyy, dxy;
-      boxes.responses(centreEntry(integral, c * layer.step, r * layer.step), dxx, dyy, dxy);
-      out[c] = dxx * dyy - dxy * dxy;
+// The integral table read with a step: entry (x, y) sits in plane x mod step, at column
+// x / step, so that as a filter's centre moves one step along a row, each of its corners moves
+// one entry. For step 1 the table itself is the one plane.
+struct SteppedTable {
+  const std::uint32_t* base = nullptr;
+  int step = 1;
+  int width = 0;               // entries in a plane's row
+  std::size_t plane_size = 0;  // entries in a plane
+
+  // Where column x >= 0 of row 0 sits; row y's entry is width * y further, and entries x + step,
+  // x + 2 step, ... follow it.
+  std::size_t column(int x) const { return (x % step) * plane_size + x / step; }
+};
+
+SteppedTable steppedTable(const IntegralImage& integral, int step,
+                          std::vector<std::uint32_t>& planes) {
+  SteppedTable t;
+  t.step = step;
+  if (step == 1) {
+    t.base = integral.data();
+    t.width = integral.stride();
+    t.plane_size = static_cast<std::size_t>(integral.height() + 1) * integral.stride();
+    return t;
+  }
+  const int rows = integral.height() + 1;
+  t.width = (integral.stride() + step - 1) / step;
+  t.plane_size = static_cast<std::size_t>(rows) * t.width;
+  planes.resize(t.plane_size * step);
+  for (int residue = 0; residue < step; ++residue) {
+    for (int y = 0; y < rows; ++y) {
+      const std::uint32_t* from = integral.data() + static_cast<std::size_t>(y) * integral.stride();
+      std::uint32_t* to =
+          planes.data() + residue * t.plane_size + static_cast<std::size_t>(y) * t.width;
+      for (int j = 0, x = residue; x < integral.stride(); ++j, x += step) to[j] = from[x];
     }
   }
+  t.base = planes.data();
+  return t;
+}
+
+// HessianBoxes' eight boxes as 32 corners (bottom right, top right, bottom left, top left of
+// each, in its order), relative to the filter centre, and its two scales.
+struct HessianCorners {
+  int dx[32], dy[32];
+  float inv_lobe_area, dxy_weight;
+
+  explicit HessianCorners(int filter_size) {
+    const int lobe = filter_size / 3, half = (filter_size - 1) / 2, lobe_half = (lobe - 1) / 2;
+    const int boxes[8][4] = {{-(lobe - 1), -half, lobe, half + 1},
+                             {-(lobe - 1), -lobe_half, lobe, lobe_half + 1},
+                             {-half, -(lobe - 1), half + 1, lobe},
+                             {-lobe_half, -(lobe - 1), lobe_half + 1, lobe},
+                             {-lobe, -lobe, 0, 0},
+                             {1, -lobe, lobe + 1, 0},
+                             {-lobe, 1, 0, lobe + 1},
+                             {1, 1, lobe + 1, lobe + 1}};
+    for (int b = 0; b < 8; ++b) {
+      const int left = boxes[b][0], top = boxes[b][1], right = boxes[b][2], bottom = boxes[b][3];
+      const int corners[4][2] = {{right, bottom}, {right, top}, {left, bottom}, {left, top}};
+      for (int k = 0; k < 4; ++k) {
+        dx[4 * b + k] = corners[k][0];
+        dy[4 * b + k] = corners[k][1];
+      }
+    }
+    inv_lobe_area = 1.0f / static_cast<float>(lobe * (2 * lobe - 1));
+    dxy_weight = dxyWeight(lobe);
+  }
+};
+
+// HessianBoxes::responses() and the determinant, from the corners' entries p[k][c].
+inline float determinantAt(const std::uint32_t* const* p, int c, const HessianCorners& h) {
+  const auto box = [&](int b) {
+    return p[4 * b][c] - p[4 * b + 1][c] - p[4 * b + 2][c] + p[4 * b + 3][c];
+  };
+  const auto dyy_int = static_cast<std::int32_t>(box(0) - 3u * box(1));
+  const auto dxx_int = static_cast<std::int32_t>(box(2) - 3u * box(3));
+  const auto dxy_int = static_cast<std::int32_t>(box(4) + box(7) - box(5) - box(6));
+  const float dxx = static_cast<float>(dxx_int) * h.inv_lobe_area;
+  const float dyy = static_cast<float>(dyy_int) * h.inv_lobe_area;
+  const float dxy = static_cast<float>(dxy_int) * h.inv_lobe_area * h.dxy_weight;
+  return dxx * dyy - dxy * dxy;
 }
 
 #if defined(__GNUC__) && defined(__x86_64__)
 #define PLACEDB_LAYER_ROWS_AVX2 1
-// The same loop compiled for AVX2, eight samples to a vector instead of four. AVX2 alone has no
-// fused multiply-add to round differently: the same operations give the same determinants.
-__attribute__((target("avx2"))) void layerRowsAvx2(const IntegralImage& integral,
-                                                   ResponseLayer& layer, int row_begin,
-                                                   int row_end) {
-  layerRows(integral, layer, row_begin, row_end);
+// determinantAt() of centres c .. c + 7: the same integer sums and the same float operations
+// (AVX2 alone has no fused multiply-add to round differently), so the same determinants.
+__attribute__((target("avx2"))) void determinantsAvx2(const std::uint32_t* const* p, int c, int end,
+                                                      const HessianCorners& h, float* out) {
+  const __m256 inv_area = _mm256_set1_ps(h.inv_lobe_area);
+  const __m256 weight = _mm256_set1_ps(h.dxy_weight);
+  for (; c + 8 <= end; c += 8) {
+    __m256i box[8];
+    for (int b = 0; b < 8; ++b) {
+      const std::uint32_t* const* q = p + 4 * b;
+      box[b] = _mm256_add_epi32(
+          _mm256_sub_epi32(
+              _mm256_sub_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(q[0] + c)),
+                               _mm256_loadu_si256(reinterpret_cast<const __m256i*>(q[1] + c))),
+              _mm256_loadu_si256(reinterpret_cast<const __m256i*>(q[2] + c))),
+          _mm256_loadu_si256(reinterpret_cast<const __m256i*>(q[3] + c)));
+    }
+    const __m256i dyy_int =
+        _mm256_sub_epi32(box[0], _mm256_add_epi32(_mm256_slli_epi32(box[1], 1), box[1]));
+    const __m256i dxx_int =
+        _mm256_sub_epi32(box[2], _mm256_add_epi32(_mm256_slli_epi32(box[3], 1), box[3]));
+    const __m256i dxy_int =
+        _mm256_sub_epi32(_mm256_sub_epi32(_mm256_add_epi32(box[4], box[7]), box[5]), box[6]);
+    const __m256 dxx = _mm256_mul_ps(_mm256_cvtepi32_ps(dxx_int), inv_area);
+    const __m256 dyy = _mm256_mul_ps(_mm256_cvtepi32_ps(dyy_int), inv_area);
+    const __m256 dxy = _mm256_mul_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(dxy_int), inv_area), weight);
+    _mm256_storeu_ps(out + c, _mm256_sub_ps(_mm256_mul_ps(dxx, dyy), _mm256_mul_ps(dxy, dxy)));
+  }
+  for (; c < end; ++c) out[c] = determinantAt(p, c, h);
 }
 #endif
 
-void computeLayerRows(const IntegralImage& integral, ResponseLayer& layer, int row_begin,
-                      int row_end) {
+// Determinants of rows [row_begin, row_end) of one layer (those where its filter fits).
+void computeLayerRows(const SteppedTable& table, ResponseLayer& layer, int row_begin, int row_end) {
+  const HessianCorners h(layer.filter_size);
+  const int r0 = std::max(row_begin, layer.first_row);
+  const int r1 = std::min(row_end - 1, layer.last_row);
 #if defined(PLACEDB_LAYER_ROWS_AVX2)
   static const bool avx2 = __builtin_cpu_supports("avx2");
-  if (avx2) {
-    layerRowsAvx2(integral, layer, row_begin, row_end);
-    return;
-  }
 #endif
-  layerRows(integral, layer, row_begin, row_end);
+  const int count = layer.last_col - layer.first_col + 1;
+  const int x0 = layer.first_col * layer.step;  // the first centre; its filter fits
+  std::size_t columns[32];
+  for (int k = 0; k < 32; ++k) columns[k] = table.column(x0 + h.dx[k]);
+  for (int r = r0; r <= r1; ++r) {
+    // p[k][i]: corner k of the filter centred on column first_col + i.
+    const std::uint32_t* p[32];
+    for (int k = 0; k < 32; ++k) {
+      const auto y = static_cast<std::size_t>(r * layer.step + h.dy[k]);
+      p[k] = table.base + columns[k] + y * table.width;
+    }
+    float* out = &layer.det[static_cast<std::size_t>(r) * layer.cols + layer.first_col];
+#if defined(PLACEDB_LAYER_ROWS_AVX2)
+    if (avx2) {
+      determinantsAvx2(p, 0, count, h, out);
+      continue;
+    }
+#endif
+    for (int i = 0; i < count; ++i) out[i] = determinantAt(p, i, h);
+  }
 }
 
 // True for edge-like maxima: box filters are not fully rotation invariant, so oblique edges can
@@ -339,6 +451,13 @@ std::vector<cv::KeyPoint> detectSurfBlobs(const IntegralImage& integral,
   std::vector<ResponseLayer>& layers = kept_layers;
   const int layer_count = octaves * layers_per_octave;
   if (static_cast<int>(layers.size()) < layer_count) layers.resize(layer_count);
+  thread_local std::vector<std::vector<std::uint32_t>> kept_planes;
+  std::vector<std::vector<std::uint32_t>>& planes = kept_planes;
+  if (static_cast<int>(planes.size()) < octaves) planes.resize(octaves);
+  std::vector<SteppedTable> tables;
+  for (int octave = 0; octave < octaves; ++octave) {
+    tables.push_back(steppedTable(integral, 1 << octave, planes[octave]));
+  }
   for (int i = 0; i < layer_count; ++i) {
     makeLayer(integral, i / layers_per_octave, i % layers_per_octave, layers[i]);
   }
@@ -355,7 +474,8 @@ std::vector<cv::KeyPoint> detectSurfBlobs(const IntegralImage& integral,
   }
   parallelFor(static_cast<int>(response_tasks.size()), settings.threads, [&](int t) {
     const RowBlock& task = response_tasks[t];
-    computeLayerRows(integral, layers[task.item], task.row_begin, task.row_end);
+    computeLayerRows(tables[task.item / layers_per_octave], layers[task.item], task.row_begin,
+                     task.row_end);
   });
 
   // Extrema: one task per block of rows of one middle layer, concatenated in task order.
