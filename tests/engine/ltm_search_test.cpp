@@ -3,6 +3,7 @@
 // every tier, with a verdict).
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
@@ -140,6 +141,24 @@ TEST(PlaceCodes, SameImageCodesAlikeOtherImagesLess) {
   const PlaceCoder again = PlaceCoder::fromBytes(coder.toBytes(), 64);
   EXPECT_EQ(again.encode(a), ca);
   EXPECT_THROW(PlaceCoder::fromBytes(coder.toBytes(), 128), Error);
+}
+
+TEST(PlaceCodes, CodesAreTheOnesStoredMapsHold) {
+  // Maps store every location's code and compare new frames' codes with them: encode() must
+  // give the same bytes as the coder that wrote them. The hash is that of the codes of the
+  // straightforward projection (one output at a time, its inputs in order).
+  cv::RNG rng(5);
+  cv::Mat training(300, 64, CV_32F);
+  rng.fill(training, cv::RNG::UNIFORM, -1.0, 1.0);
+  const PlaceCoder coder = PlaceCoder::train(training, PlaceCodeSettings());
+  std::uint64_t hash = 1469598103934665603ull;  // FNV-1a over every code's bytes
+  for (int f = 0; f < 20; ++f) {
+    cv::Mat descriptors(40 + f * 7, 64, CV_32F);
+    rng.fill(descriptors, cv::RNG::UNIFORM, -1.0, 1.0);
+    for (std::int8_t b : coder.encode(descriptors))
+      hash = (hash ^ static_cast<std::uint8_t>(b)) * 1099511628211ull;
+  }
+  EXPECT_EQ(hash, 12060841445019307796ull);
 }
 
 TEST(PlaceCodes, IndexRanksByCosineWithIdsBreakingTies) {

@@ -59,12 +59,17 @@ PlaceCoder::PlaceCoder(cv::Mat centres, int code_dim)
 
 void PlaceCoder::makeProjection() {
   const std::size_t in = static_cast<std::size_t>(centres_.rows) * static_cast<std::size_t>(dim_);
-  signs_.resize(static_cast<std::size_t>(code_dim_) * in);
+  const auto outputs = static_cast<std::size_t>(code_dim_);
+  signs_.resize(outputs * in);
+  // The random stream fills the matrix output by output (row o, then input i); it is stored
+  // input by input, so that encode() adds one input to every output at a time.
   std::uint64_t state = kProjectionSeed;
-  for (std::size_t i = 0; i < signs_.size(); i += 64) {
+  for (std::size_t k = 0; k < signs_.size(); k += 64) {
     const std::uint64_t bits = nextRandom(state);
-    for (std::size_t b = 0; b < 64 && i + b < signs_.size(); ++b)
-      signs_[i + b] = (bits >> b) & 1 ? 1 : -1;
+    for (std::size_t b = 0; b < 64 && k + b < signs_.size(); ++b) {
+      const std::size_t o = (k + b) / in, i = (k + b) % in;
+      signs_[i * outputs + o] = (bits >> b) & 1 ? 1 : -1;
+    }
   }
 }
 
@@ -168,15 +173,18 @@ std::vector<std::int8_t> PlaceCoder::encode(const cv::Mat& descriptors) const {
       block[j] = v < 0 ? -std::sqrt(-v) : std::sqrt(v);
     }
   }
+  // Each output is the sum of its inputs in input order, as the straightforward loop over one
+  // output at a time adds them; taking every output at once, one input at a time, keeps that
+  // order and lets the compiler add many outputs per instruction (a sum over one output cannot
+  // be reordered).
   std::vector<float> projected(static_cast<std::size_t>(code_dim_), 0.0f);
-  float largest = 0;
-  for (int o = 0; o < code_dim_; ++o) {
-    const std::int8_t* sign = signs_.data() + static_cast<std::size_t>(o) * vlad.size();
-    float sum = 0;
-    for (std::size_t i = 0; i < vlad.size(); ++i) sum += sign[i] * vlad[i];
-    projected[o] = sum;
-    largest = std::max(largest, std::fabs(sum));
+  for (std::size_t i = 0; i < vlad.size(); ++i) {
+    const std::int8_t* sign = signs_.data() + i * static_cast<std::size_t>(code_dim_);
+    const float v = vlad[i];
+    for (int o = 0; o < code_dim_; ++o) projected[o] += sign[o] * v;
   }
+  float largest = 0;
+  for (int o = 0; o < code_dim_; ++o) largest = std::max(largest, std::fabs(projected[o]));
   std::vector<std::int8_t> code(static_cast<std::size_t>(code_dim_), 0);
   if (largest <= 0) return code;
   // Cosine similarity is scale-free, so each code uses its own full byte range.

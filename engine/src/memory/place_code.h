@@ -53,7 +53,7 @@ class PlaceCoder {
   int dim_ = 0;
   int code_dim_ = 0;
   cv::Mat centres_;                 // K x dim, CV_32F
-  std::vector<std::int8_t> signs_;  // code_dim x (K x dim) projection, +-1
+  std::vector<std::int8_t> signs_;  // (K x dim) x code_dim projection, +-1, input-major
 };
 
 // Dot product of two codes of `code_dim` bytes: exact in 32 bits for every code_dim PlaceCoder
