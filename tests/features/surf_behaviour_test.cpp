@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <vector>
 
@@ -17,13 +18,8 @@
 namespace placedb {
 namespace {
 
-// A real frame when the data sets are there, else blobs of many sizes on a ramp (the contract
-// does not depend on the scene, so these tests never skip).
-cv::Mat testImage() {
-  const auto dir = testing::dataset("lip6_outdoor");
-  if (!dir.empty()) {
-    return loadGreyImage((dir / "images/outdoor_kennedylong_000200.png").string());
-  }
+// Blobs of many sizes on a ramp.
+cv::Mat blobsOnARamp() {
   cv::Mat image(240, 320, CV_8UC1);
   for (int y = 0; y < image.rows; ++y)
     for (int x = 0; x < image.cols; ++x) image.at<uchar>(y, x) = static_cast<uchar>(60 + x / 4);
@@ -33,6 +29,16 @@ cv::Mat testImage() {
                cv::Scalar(rng.uniform(0, 256)), cv::FILLED, cv::LINE_AA);
   }
   return image;
+}
+
+// A real frame when the data sets are there, else blobsOnARamp() (the contract does not depend
+// on the scene, so these tests never skip).
+cv::Mat testImage() {
+  const auto dir = testing::dataset("lip6_outdoor");
+  if (!dir.empty()) {
+    return loadGreyImage((dir / "images/outdoor_kennedylong_000200.png").string());
+  }
+  return blobsOnARamp();
 }
 
 Features surfOf(const cv::Mat& image, FeatureOptions options = FeatureOptions()) {
@@ -267,6 +273,39 @@ TEST(SurfBehaviour, AnImageOfAnotherSizeInBetweenChangesNoBit) {
   EXPECT_TRUE(bitIdentical(first, surfOf(image)));
   ASSERT_GT(surfOf(large).size(), 0u);
   EXPECT_TRUE(bitIdentical(first, surfOf(image)));
+}
+
+// FNV-1a over every keypoint's fields and every descriptor byte.
+std::uint64_t hashOf(const Features& f) {
+  std::uint64_t hash = 1469598103934665603ull;
+  const auto add = [&](const void* data, std::size_t bytes) {
+    const auto* c = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < bytes; ++i) hash = (hash ^ c[i]) * 1099511628211ull;
+  };
+  for (const Keypoint& k : f.keypoints) {
+    add(&k.x, sizeof k.x);
+    add(&k.y, sizeof k.y);
+    add(&k.size, sizeof k.size);
+    add(&k.angle, sizeof k.angle);
+    add(&k.response, sizeof k.response);
+    add(&k.octave, sizeof k.octave);
+  }
+  add(f.descriptors.data, f.descriptors.total() * f.descriptors.elemSize());
+  return hash;
+}
+
+TEST(SurfBehaviour, FeaturesAreTheOnesStoredMapsWereBuiltFrom) {
+  // A map's words and signatures come from these bits: a faster detector or descriptor must
+  // give the same ones. The hashes are those every earlier build gave; the small image
+  // takes the second search at twice its size.
+  const cv::Mat image = blobsOnARamp();
+  cv::Mat small;
+  cv::resize(image, small, cv::Size(), 0.375, 0.375, cv::INTER_AREA);
+  const Features large_features = surfOf(image), small_features = surfOf(small);
+  EXPECT_EQ(large_features.size(), 166u);
+  EXPECT_EQ(hashOf(large_features), 13812290237754038512ull);
+  EXPECT_EQ(small_features.size(), 100u);
+  EXPECT_EQ(hashOf(small_features), 4192547597795979090ull);
 }
 
 TEST(SurfBehaviour, FlatImageGivesNoFeatures) {

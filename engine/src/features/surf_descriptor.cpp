@@ -129,22 +129,74 @@ const std::vector<OrientationSample>& orientationSamples() {
   return samples;
 }
 
-// Gaussian weight of descriptor sample (k, m), both 0..19, centred on the window.
-const std::array<float, kDescriptorSamples * kDescriptorSamples>& descriptorWeights() {
-  static const auto weights = [] {
-    std::array<float, kDescriptorSamples * kDescriptorSamples> out{};
+// The descriptor's samples, in the order (row m, column j of a sub-region, sub-region column q)
+// of the window's column k = 5 q + j: one row's samples of the four sub-regions side by side, so
+// that each sub-region's sums take its samples in the order of rows then columns while the four
+// are summed together.
+constexpr int kDescriptorSampleCount = kDescriptorSamples * kDescriptorSamples;
+struct DescriptorSamples {
+  // Offsets (u, v) from the window's centre, in units of s, and Gaussian weights.
+  std::array<float, kDescriptorSampleCount> u{}, v{}, weight{};
+};
+
+const DescriptorSamples& descriptorSamples() {
+  static const DescriptorSamples samples = [] {
+    DescriptorSamples out;
     const float inv_two_sigma_sq = 1.0f / (2.0f * kDescriptorSigma * kDescriptorSigma);
+    int p = 0;
     for (int m = 0; m < kDescriptorSamples; ++m) {
-      for (int k = 0; k < kDescriptorSamples; ++k) {
-        const float u = k - (kDescriptorSamples - 1) / 2.0f;
-        const float v = m - (kDescriptorSamples - 1) / 2.0f;
-        out[m * kDescriptorSamples + k] = std::exp(-(u * u + v * v) * inv_two_sigma_sq);
+      for (int j = 0; j < kSamplesPerSubregion; ++j) {
+        for (int q = 0; q < 4; ++q, ++p) {
+          const int k = q * kSamplesPerSubregion + j;
+          const float u = k - (kDescriptorSamples - 1) / 2.0f;
+          const float v = m - (kDescriptorSamples - 1) / 2.0f;
+          out.u[p] = u;
+          out.v[p] = v;
+          out.weight[p] = std::exp(-(u * u + v * v) * inv_two_sigma_sq);
+        }
       }
     }
     return out;
   }();
-  return weights;
+  return samples;
 }
+
+// Sample p's table coordinates: nearestBoundary() of (x0 + s (u cos - v sin), y0 + s (u sin +
+// v cos)).
+void descriptorCentres(const DescriptorSamples& samples, float x0, float y0, float s, float cos_t,
+                       float sin_t, int* a, int* b) {
+  for (int p = 0; p < kDescriptorSampleCount; ++p) {
+    const float u = samples.u[p], v = samples.v[p];
+    a[p] = nearestBoundary(x0 + s * (u * cos_t - v * sin_t));
+    b[p] = nearestBoundary(y0 + s * (u * sin_t + v * cos_t));
+  }
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#define PLACEDB_DESCRIPTOR_CENTRES_AVX2 1
+// The same, eight samples at a time: the same float operations in the same order (AVX2 alone has
+// no fused multiply-add to round differently), and floor as nearestBoundary() takes it.
+__attribute__((target("avx2"))) void descriptorCentresAvx2(const DescriptorSamples& samples,
+                                                           float x0, float y0, float s, float cos_t,
+                                                           float sin_t, int* a, int* b) {
+  const __m256 vx0 = _mm256_set1_ps(x0), vy0 = _mm256_set1_ps(y0), vs = _mm256_set1_ps(s);
+  const __m256 vc = _mm256_set1_ps(cos_t), vsn = _mm256_set1_ps(sin_t);
+  const __m256 one = _mm256_set1_ps(1.0f);
+  static_assert(kDescriptorSampleCount % 8 == 0, "whole vectors of samples");
+  for (int p = 0; p < kDescriptorSampleCount; p += 8) {
+    const __m256 u = _mm256_loadu_ps(samples.u.data() + p);
+    const __m256 v = _mm256_loadu_ps(samples.v.data() + p);
+    const __m256 x = _mm256_add_ps(
+        vx0, _mm256_mul_ps(vs, _mm256_sub_ps(_mm256_mul_ps(u, vc), _mm256_mul_ps(v, vsn))));
+    const __m256 y = _mm256_add_ps(
+        vy0, _mm256_mul_ps(vs, _mm256_add_ps(_mm256_mul_ps(u, vsn), _mm256_mul_ps(v, vc))));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(a + p),
+                        _mm256_cvttps_epi32(_mm256_floor_ps(_mm256_add_ps(x, one))));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(b + p),
+                        _mm256_cvttps_epi32(_mm256_floor_ps(_mm256_add_ps(y, one))));
+  }
+}
+#endif
 
 // The orientation bin of a response, as atan2f puts it.
 int exactOrientationBin(float rx, float ry) {
@@ -310,32 +362,43 @@ void surfDescriptor(const IntegralImage& integral, const cv::KeyPoint& keypoint,
   const int half = std::max(1, static_cast<int>(std::lround(s)));  // side 2s
   const float theta = keypoint.angle < 0 ? 0.0f : keypoint.angle * (kPi / 180.0f);
   const float cos_t = std::cos(theta), sin_t = std::sin(theta);
-  const auto& weights = descriptorWeights();
-  constexpr int kSamples = kDescriptorSamples * kDescriptorSamples;
-  std::array<int, kSamples> a, b;
-  for (int m = 0; m < kDescriptorSamples; ++m) {
-    const float v = m - (kDescriptorSamples - 1) / 2.0f;
-    for (int k = 0; k < kDescriptorSamples; ++k) {
-      const float u = k - (kDescriptorSamples - 1) / 2.0f;
-      // Sample (u, v) of the turned window, in image pixels.
-      a[m * kDescriptorSamples + k] = nearestBoundary(keypoint.pt.x + s * (u * cos_t - v * sin_t));
-      b[m * kDescriptorSamples + k] = nearestBoundary(keypoint.pt.y + s * (u * sin_t + v * cos_t));
+  const DescriptorSamples& samples = descriptorSamples();
+  // The turned window's samples, in image pixels.
+  std::array<int, kDescriptorSampleCount> a, b;
+#if defined(PLACEDB_DESCRIPTOR_CENTRES_AVX2)
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2) {
+    descriptorCentresAvx2(samples, keypoint.pt.x, keypoint.pt.y, s, cos_t, sin_t, a.data(),
+                          b.data());
+  } else
+#endif
+  {
+    descriptorCentres(samples, keypoint.pt.x, keypoint.pt.y, s, cos_t, sin_t, a.data(), b.data());
+  }
+  std::array<float, kDescriptorSampleCount> rx, ry, du, dv;
+  surfHaarResponses(integral, a.data(), b.data(), kDescriptorSampleCount, half, rx.data(),
+                    ry.data());
+  for (int p = 0; p < kDescriptorSampleCount; ++p) {
+    du[p] = (rx[p] * cos_t + ry[p] * sin_t) * samples.weight[p];
+    dv[p] = (-rx[p] * sin_t + ry[p] * cos_t) * samples.weight[p];
+  }
+  // Sums per sub-region: [band of rows][quantity][sub-region column].
+  float sums[4][4][4] = {};
+  for (int m = 0, p = 0; m < kDescriptorSamples; ++m) {
+    float(&band)[4][4] = sums[m / kSamplesPerSubregion];
+    for (int j = 0; j < kSamplesPerSubregion; ++j, p += 4) {
+      for (int q = 0; q < 4; ++q) {
+        band[0][q] += du[p + q];
+        band[1][q] += dv[p + q];
+        band[2][q] += std::abs(du[p + q]);
+        band[3][q] += std::abs(dv[p + q]);
+      }
     }
   }
-  std::array<float, kSamples> rx, ry;
-  surfHaarResponses(integral, a.data(), b.data(), kSamples, half, rx.data(), ry.data());
-  std::fill(out, out + kSurfDescriptorDim, 0.0f);
-  for (int m = 0; m < kDescriptorSamples; ++m) {
-    for (int k = 0; k < kDescriptorSamples; ++k) {
-      const int i = m * kDescriptorSamples + k;
-      const float weight = weights[i];
-      const float du = (rx[i] * cos_t + ry[i] * sin_t) * weight;
-      const float dv = (-rx[i] * sin_t + ry[i] * cos_t) * weight;
-      float* cell = out + 4 * ((m / kSamplesPerSubregion) * 4 + k / kSamplesPerSubregion);
-      cell[0] += du;
-      cell[1] += dv;
-      cell[2] += std::abs(du);
-      cell[3] += std::abs(dv);
+  for (int row = 0; row < 4; ++row) {
+    for (int q = 0; q < 4; ++q) {
+      for (int quantity = 0; quantity < 4; ++quantity)
+        out[4 * (row * 4 + q) + quantity] = sums[row][quantity][q];
     }
   }
   double norm_sq = 0;
