@@ -55,6 +55,34 @@ int nearestCentre(const cv::Mat& centres, const float* row) {
 PlaceCoder::PlaceCoder(cv::Mat centres, int code_dim)
     : dim_(centres.cols), code_dim_(code_dim), centres_(std::move(centres)) {
   makeProjection();
+  const auto k = static_cast<std::size_t>(centres_.rows);
+  centres_by_dim_.resize(k * static_cast<std::size_t>(dim_));
+  for (int c = 0; c < centres_.rows; ++c)
+    for (int j = 0; j < dim_; ++j) centres_by_dim_[j * k + c] = centres_.ptr<float>(c)[j];
+}
+
+int PlaceCoder::nearestCentreOf(const float* row, float* distances) const {
+  // nearestCentre()'s sums, every centre's at once: each centre's still adds its dimensions in
+  // order, so the same distances, and the loop over centres vectorises.
+  const int k = centres_.rows;
+  std::fill(distances, distances + k, 0.0f);
+  for (int j = 0; j < dim_; ++j) {
+    const float* column = centres_by_dim_.data() + static_cast<std::size_t>(j) * k;
+    const float x = row[j];
+    for (int c = 0; c < k; ++c) {
+      const float t = column[c] - x;
+      distances[c] += t * t;
+    }
+  }
+  int best = 0;
+  float best_distance = std::numeric_limits<float>::max();
+  for (int c = 0; c < k; ++c) {
+    if (distances[c] < best_distance) {
+      best_distance = distances[c];
+      best = c;
+    }
+  }
+  return best;
 }
 
 void PlaceCoder::makeProjection() {
@@ -155,9 +183,10 @@ PlaceCoder PlaceCoder::fromBytes(const std::vector<std::uint8_t>& bytes, int dim
 std::vector<std::int8_t> PlaceCoder::encode(const cv::Mat& descriptors) const {
   const int k = centres_.rows;
   std::vector<float> vlad(static_cast<std::size_t>(k) * static_cast<std::size_t>(dim_), 0.0f);
+  std::vector<float> distances(static_cast<std::size_t>(k));
   for (int i = 0; i < descriptors.rows; ++i) {
     const float* row = descriptors.ptr<float>(i);
-    const int c = nearestCentre(centres_, row);
+    const int c = nearestCentreOf(row, distances.data());
     const float* centre = centres_.ptr<float>(c);
     float* block = vlad.data() + static_cast<std::size_t>(c) * dim_;
     for (int j = 0; j < dim_; ++j) block[j] += row[j] - centre[j];

@@ -49,11 +49,14 @@ class PlaceCoder {
  private:
   PlaceCoder(cv::Mat centres, int code_dim);
   void makeProjection();
+  // The nearest centre of a descriptor; `distances` holds centres() floats of scratch.
+  int nearestCentreOf(const float* row, float* distances) const;
 
   int dim_ = 0;
   int code_dim_ = 0;
-  cv::Mat centres_;                 // K x dim, CV_32F
-  std::vector<std::int8_t> signs_;  // (K x dim) x code_dim projection, +-1, input-major
+  cv::Mat centres_;                    // K x dim, CV_32F
+  std::vector<float> centres_by_dim_;  // the same, dim x K
+  std::vector<std::int8_t> signs_;     // (K x dim) x code_dim projection, +-1, input-major
 };
 
 // Dot product of two codes of `code_dim` bytes: exact in 32 bits for every code_dim PlaceCoder
