@@ -25,6 +25,21 @@ using detail::Statement;
 
 constexpr std::int64_t kProgressEvery = 20000;
 
+// A kd-forest node row of kd_nodes or session_kd_nodes: tree, node, left and right child, split
+// dimension and value from column `first` on, then its checksum.
+bool kdNodeMatches(const Statement& s, int first) {
+  return detail::checksumMatches(
+      s, first + 6,
+      detail::kdNodeChecksum(s.columnInt(first), s.columnInt(first + 1), s.columnInt(first + 2),
+                             s.columnInt(first + 3), s.columnInt(first + 4),
+                             s.columnDouble(first + 5)));
+}
+
+std::string kdNodeName(const Statement& s, int first) {
+  return "tree " + std::to_string(s.columnInt(first)) + ", node " +
+         std::to_string(s.columnInt(first + 1));
+}
+
 class Checker {
  public:
   Checker(Database& db, const CheckOptions& options, CheckReport& report)
@@ -118,14 +133,8 @@ class Checker {
          "FROM kd_nodes",
          [&](const Statement& s) {
            ++kd_rows;
-           if (!detail::checksumMatches(
-                   s, 6,
-                   detail::kdNodeChecksum(s.columnInt(0), s.columnInt(1), s.columnInt(2),
-                                          s.columnInt(3), s.columnInt(4), s.columnDouble(5))))
-             find("kd_nodes",
-                  "(tree " + std::to_string(s.columnInt(0)) + ", node " +
-                      std::to_string(s.columnInt(1)) + ")",
-                  "fails its checksum");
+           if (!kdNodeMatches(s, 0))
+             find("kd_nodes", "(" + kdNodeName(s, 0) + ")", "fails its checksum");
          });
     if (!kd_rows_recorded)
       find("engine_state", std::string("'") + detail::kKdNodeRowsKey + "'", "is missing");
@@ -154,14 +163,9 @@ class Checker {
          "checksum FROM session_kd_nodes",
          [&](const Statement& s) {
            ++counted[s.columnInt(0)];
-           if (!detail::checksumMatches(
-                   s, 7,
-                   detail::kdNodeChecksum(s.columnInt(1), s.columnInt(2), s.columnInt(3),
-                                          s.columnInt(4), s.columnInt(5), s.columnDouble(6))))
+           if (!kdNodeMatches(s, 1))
              find("session_kd_nodes",
-                  "(session " + std::to_string(s.columnInt(0)) + ", tree " +
-                      std::to_string(s.columnInt(1)) + ", node " + std::to_string(s.columnInt(2)) +
-                      ")",
+                  "(session " + std::to_string(s.columnInt(0)) + ", " + kdNodeName(s, 1) + ")",
                   "fails its checksum");
          });
     for (const auto& [session, text] : recorded)
