@@ -182,17 +182,18 @@ TEST(Checkpoint, TheLogIsCopiedBackWhileTheWriterGoesOnAndGoneAfterClose) {
 TEST(Concurrency, SecondPlacedbWriterIsRefused) {
   const auto dir = placedb::testing::scratchDir("SecondWriter");
   const std::string path = (dir / "map.db").string();
-  SqliteMapStore first(path, OpenMode::kReadWrite);
-  try {
-    SqliteMapStore second(path, OpenMode::kReadWrite);
-    FAIL() << "a second writer opened the map";
-  } catch (const Error& error) {
-    EXPECT_EQ(error.code(), ErrorCode::kMapBusy);
-    EXPECT_NE(std::string(error.what()).find("another placedb writer"), std::string::npos);
-  }
-  // Another process is refused the same way, while readers stay welcome.
+  // The other process is forked before this one opens the map: an open map runs a checkpoint
+  // thread, and a child forked beside a thread can inherit a lock that thread held (the
+  // allocator's, under the sanitizers) and hang. The child waits until the first writer is in.
+  int ready[2];
+  ASSERT_EQ(pipe(ready), 0);
   const pid_t child = fork();
+  ASSERT_GE(child, 0);
   if (child == 0) {
+    close(ready[1]);
+    char go = 0;
+    if (read(ready[0], &go, 1) != 1) _exit(3);
+    // Another process is refused the same way, while readers stay welcome.
     try {
       SqliteMapStore reader(path, OpenMode::kReadOnly);
       SqliteMapStore second(path, OpenMode::kReadWrite);
@@ -201,9 +202,23 @@ TEST(Concurrency, SecondPlacedbWriterIsRefused) {
       _exit(error.code() == ErrorCode::kMapBusy ? 0 : 2);
     }
   }
-  int status = 0;
-  waitpid(child, &status, 0);
-  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "child status " << status;
+  close(ready[0]);
+  {
+    SqliteMapStore first(path, OpenMode::kReadWrite);
+    try {
+      SqliteMapStore second(path, OpenMode::kReadWrite);
+      ADD_FAILURE() << "a second writer opened the map";
+    } catch (const Error& error) {
+      EXPECT_EQ(error.code(), ErrorCode::kMapBusy);
+      EXPECT_NE(std::string(error.what()).find("another placedb writer"), std::string::npos);
+    }
+    const char go = 1;
+    EXPECT_EQ(write(ready[1], &go, 1), 1);
+    close(ready[1]);
+    int status = 0;
+    waitpid(child, &status, 0);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "child status " << status;
+  }
 }
 
 TEST(Concurrency, ForeignWriteTransactionMakesBeginBusy) {
