@@ -15,22 +15,6 @@
 namespace placedb {
 namespace {
 
-// Offsets (into the integral table, relative to the filter centre's entry) of a box's corners.
-struct BoxCorners {
-  int top_left = 0, top_right = 0, bottom_left = 0, bottom_right = 0;
-
-  // The box covers pixels [x + left, x + right) x [y + top, y + bottom) around centre (x, y).
-  BoxCorners(int left, int top, int right, int bottom, int stride)
-      : top_left(top * stride + left),
-        top_right(top * stride + right),
-        bottom_left(bottom * stride + left),
-        bottom_right(bottom * stride + right) {}
-
-  std::uint32_t sum(const std::uint32_t* centre) const {
-    return centre[bottom_right] - centre[top_right] - centre[bottom_left] + centre[top_left];
-  }
-};
-
 // The determinant-of-Hessian map of one filter size, sampled every `step` pixels.
 struct ResponseLayer {
   int filter_size = 0;
@@ -85,53 +69,6 @@ void makeLayer(const IntegralImage& integral, int octave, int layer, ResponseLay
   out.det.resize(static_cast<std::size_t>(out.rows) * out.cols);
 }
 
-// The three box filters of one filter size, as offsets from the centre's integral entry.
-class HessianBoxes {
- public:
-  HessianBoxes(int filter_size, int stride)
-      : lobe_(filter_size / 3),
-        half_((filter_size - 1) / 2),
-        lobe_half_((lobe_ - 1) / 2),
-        // Dyy = three lobes stacked vertically (+1, -2, +1) = whole column - 3 x middle lobe.
-        dyy_whole_(-(lobe_ - 1), -half_, lobe_, half_ + 1, stride),
-        dyy_middle_(-(lobe_ - 1), -lobe_half_, lobe_, lobe_half_ + 1, stride),
-        dxx_whole_(-half_, -(lobe_ - 1), half_ + 1, lobe_, stride),
-        dxx_middle_(-lobe_half_, -(lobe_ - 1), lobe_half_ + 1, lobe_, stride),
-        // Dxy = four lobe x lobe boxes around the centre, one pixel apart: + - / - +.
-        dxy_top_left_(-lobe_, -lobe_, 0, 0, stride),
-        dxy_top_right_(1, -lobe_, lobe_ + 1, 0, stride),
-        dxy_bottom_left_(-lobe_, 1, 0, lobe_ + 1, stride),
-        dxy_bottom_right_(1, 1, lobe_ + 1, lobe_ + 1, stride),
-        dxy_weight_(dxyWeight(lobe_)),
-        // OpenCV's scale for Dxx and Dyy, so that Hessian thresholds keep their usual meaning.
-        inv_lobe_area_(1.0f / static_cast<float>(lobe_ * (2 * lobe_ - 1))) {}
-
-  // Box sums wrap like the table itself; the int32 casts recover the exact signed values.
-  void responses(const std::uint32_t* centre, float& dxx, float& dyy, float& dxy) const {
-    const auto dyy_int =
-        static_cast<std::int32_t>(dyy_whole_.sum(centre) - 3u * dyy_middle_.sum(centre));
-    const auto dxx_int =
-        static_cast<std::int32_t>(dxx_whole_.sum(centre) - 3u * dxx_middle_.sum(centre));
-    const auto dxy_int =
-        static_cast<std::int32_t>(dxy_top_left_.sum(centre) + dxy_bottom_right_.sum(centre) -
-                                  dxy_top_right_.sum(centre) - dxy_bottom_left_.sum(centre));
-    dxx = static_cast<float>(dxx_int) * inv_lobe_area_;
-    dyy = static_cast<float>(dyy_int) * inv_lobe_area_;
-    dxy = static_cast<float>(dxy_int) * inv_lobe_area_ * dxy_weight_;
-  }
-
- private:
-  int lobe_, half_, lobe_half_;
-  BoxCorners dyy_whole_, dyy_middle_, dxx_whole_, dxx_middle_;
-  BoxCorners dxy_top_left_, dxy_top_right_, dxy_bottom_left_, dxy_bottom_right_;
-  float dxy_weight_;
-  float inv_lobe_area_;
-};
-
-const std::uint32_t* centreEntry(const IntegralImage& integral, int x, int y) {
-  return integral.data() + static_cast<std::size_t>(y) * integral.stride() + x;
-}
-
 // The integral table read with a step: entry (x, y) sits in plane x mod step, at column
 // x / step, so that as a filter's centre moves one step along a row, each of its corners moves
 // one entry. For step 1 the table itself is the one plane.
@@ -172,22 +109,26 @@ SteppedTable steppedTable(const IntegralImage& integral, int step,
   return t;
 }
 
-// HessianBoxes' eight boxes as 32 corners (bottom right, top right, bottom left, top left of
-// each, in its order), relative to the filter centre, and its two scales.
-struct HessianCorners {
+// The three box filters of one filter size as 32 box corners relative to the filter's centre
+// (bottom right, top right, bottom left, top left of each box), and their scales.
+struct HessianBoxes {
   int dx[32], dy[32];
   float inv_lobe_area, dxy_weight;
 
-  explicit HessianCorners(int filter_size) {
+  explicit HessianBoxes(int filter_size) {
     const int lobe = filter_size / 3, half = (filter_size - 1) / 2, lobe_half = (lobe - 1) / 2;
-    const int boxes[8][4] = {{-(lobe - 1), -half, lobe, half + 1},
-                             {-(lobe - 1), -lobe_half, lobe, lobe_half + 1},
-                             {-half, -(lobe - 1), half + 1, lobe},
-                             {-lobe_half, -(lobe - 1), lobe_half + 1, lobe},
-                             {-lobe, -lobe, 0, 0},
-                             {1, -lobe, lobe + 1, 0},
-                             {-lobe, 1, 0, lobe + 1},
-                             {1, 1, lobe + 1, lobe + 1}};
+    // Boxes (left, top, right, bottom): pixels [x + left, x + right) x [y + top, y + bottom)
+    // around centre (x, y). Dyy = three lobes stacked vertically (+1, -2, +1) = whole column -
+    // 3 x middle lobe, Dxx the same across; Dxy = four lobe x lobe boxes around the centre, one
+    // pixel apart: + - / - +.
+    const int boxes[8][4] = {{-(lobe - 1), -half, lobe, half + 1},            // Dyy whole
+                             {-(lobe - 1), -lobe_half, lobe, lobe_half + 1},  // Dyy middle
+                             {-half, -(lobe - 1), half + 1, lobe},            // Dxx whole
+                             {-lobe_half, -(lobe - 1), lobe_half + 1, lobe},  // Dxx middle
+                             {-lobe, -lobe, 0, 0},                            // Dxy top left
+                             {1, -lobe, lobe + 1, 0},                         // top right
+                             {-lobe, 1, 0, lobe + 1},                         // bottom left
+                             {1, 1, lobe + 1, lobe + 1}};                     // bottom right
     for (int b = 0; b < 8; ++b) {
       const int left = boxes[b][0], top = boxes[b][1], right = boxes[b][2], bottom = boxes[b][3];
       const int corners[4][2] = {{right, bottom}, {right, top}, {left, bottom}, {left, top}};
@@ -196,22 +137,30 @@ struct HessianCorners {
         dy[4 * b + k] = corners[k][1];
       }
     }
+    // OpenCV's scale for Dxx and Dyy, so that Hessian thresholds keep their usual meaning.
     inv_lobe_area = 1.0f / static_cast<float>(lobe * (2 * lobe - 1));
     dxy_weight = dxyWeight(lobe);
   }
+
+  // The responses of the filter whose corner k is the table entry p[k][c]. Box sums wrap like
+  // the table itself; the int32 casts recover the exact signed values.
+  void responses(const std::uint32_t* const* p, int c, float& dxx, float& dyy, float& dxy) const {
+    const auto box = [&](int b) {
+      return p[4 * b][c] - p[4 * b + 1][c] - p[4 * b + 2][c] + p[4 * b + 3][c];
+    };
+    const auto dyy_int = static_cast<std::int32_t>(box(0) - 3u * box(1));
+    const auto dxx_int = static_cast<std::int32_t>(box(2) - 3u * box(3));
+    const auto dxy_int = static_cast<std::int32_t>(box(4) + box(7) - box(5) - box(6));
+    dxx = static_cast<float>(dxx_int) * inv_lobe_area;
+    dyy = static_cast<float>(dyy_int) * inv_lobe_area;
+    dxy = static_cast<float>(dxy_int) * inv_lobe_area * dxy_weight;
+  }
 };
 
-// HessianBoxes::responses() and the determinant, from the corners' entries p[k][c].
-inline float determinantAt(const std::uint32_t* const* p, int c, const HessianCorners& h) {
-  const auto box = [&](int b) {
-    return p[4 * b][c] - p[4 * b + 1][c] - p[4 * b + 2][c] + p[4 * b + 3][c];
-  };
-  const auto dyy_int = static_cast<std::int32_t>(box(0) - 3u * box(1));
-  const auto dxx_int = static_cast<std::int32_t>(box(2) - 3u * box(3));
-  const auto dxy_int = static_cast<std::int32_t>(box(4) + box(7) - box(5) - box(6));
-  const float dxx = static_cast<float>(dxx_int) * h.inv_lobe_area;
-  const float dyy = static_cast<float>(dyy_int) * h.inv_lobe_area;
-  const float dxy = static_cast<float>(dxy_int) * h.inv_lobe_area * h.dxy_weight;
+// The determinant of the filter whose corner k is the table entry p[k][c].
+inline float determinantAt(const std::uint32_t* const* p, int c, const HessianBoxes& h) {
+  float dxx, dyy, dxy;
+  h.responses(p, c, dxx, dyy, dxy);
   return dxx * dyy - dxy * dxy;
 }
 
@@ -220,7 +169,7 @@ inline float determinantAt(const std::uint32_t* const* p, int c, const HessianCo
 // determinantAt() of centres c .. c + 7: the same integer sums and the same float operations
 // (AVX2 alone has no fused multiply-add to round differently), so the same determinants.
 __attribute__((target("avx2"))) void determinantsAvx2(const std::uint32_t* const* p, int c, int end,
-                                                      const HessianCorners& h, float* out) {
+                                                      const HessianBoxes& h, float* out) {
   const __m256 inv_area = _mm256_set1_ps(h.inv_lobe_area);
   const __m256 weight = _mm256_set1_ps(h.dxy_weight);
   for (; c + 8 <= end; c += 8) {
@@ -251,7 +200,7 @@ __attribute__((target("avx2"))) void determinantsAvx2(const std::uint32_t* const
 
 // Determinants of rows [row_begin, row_end) of one layer (those where its filter fits).
 void computeLayerRows(const SteppedTable& table, ResponseLayer& layer, int row_begin, int row_end) {
-  const HessianCorners h(layer.filter_size);
+  const HessianBoxes h(layer.filter_size);
   const int r0 = std::max(row_begin, layer.first_row);
   const int r1 = std::min(row_end - 1, layer.last_row);
 #if defined(PLACEDB_LAYER_ROWS_AVX2)
@@ -284,9 +233,14 @@ void computeLayerRows(const SteppedTable& table, ResponseLayer& layer, int row_b
 // test: trace^2 / det exceeds (ratio + 1)^2 / ratio for a principal curvature ratio over `ratio`).
 bool isEdgeLike(const IntegralImage& integral, const ResponseLayer& layer, int r, int c, float det,
                 float ratio) {
-  const HessianBoxes boxes(layer.filter_size, integral.stride());
+  const HessianBoxes h(layer.filter_size);
+  const std::uint32_t* p[32];
+  for (int k = 0; k < 32; ++k) {
+    const auto y = static_cast<std::size_t>(r * layer.step + h.dy[k]);
+    p[k] = integral.data() + y * integral.stride() + c * layer.step + h.dx[k];
+  }
   float dxx, dyy, dxy;
-  boxes.responses(centreEntry(integral, c * layer.step, r * layer.step), dxx, dyy, dxy);
+  h.responses(p, 0, dxx, dyy, dxy);
   const float trace = dxx + dyy;
   return trace * trace * ratio >= (ratio + 1) * (ratio + 1) * det;
 }
