@@ -19,6 +19,20 @@ bool sumMatches(const detail::PgResult& r, int row, int column, std::uint32_t co
   return !r.isNull(row, column) && r.integer(row, column) == std::int64_t{computed};
 }
 
+// A kd-forest node row of kd_nodes or session_kd_nodes: tree, node, left and right child, split
+// dimension and value from column `first` on, then its checksum (as map_check.cpp's).
+bool kdNodeMatches(const detail::PgResult& r, int row, int first) {
+  return sumMatches(r, row, first + 6,
+                    detail::kdNodeChecksum(r.integer(row, first), r.integer(row, first + 1),
+                                           r.integer(row, first + 2), r.integer(row, first + 3),
+                                           r.integer(row, first + 4), r.real(row, first + 5)));
+}
+
+std::string kdNodeName(const detail::PgResult& r, int row, int first) {
+  return "tree " + std::to_string(r.integer(row, first)) + ", node " +
+         std::to_string(r.integer(row, first + 1));
+}
+
 class PgChecker {
  public:
   PgChecker(detail::PgConnection& db, const CheckOptions& options, CheckReport& report)
@@ -82,13 +96,8 @@ class PgChecker {
          "FROM kd_nodes",
          [&](const detail::PgResult& r, int i) {
            ++kd_rows;
-           if (!sumMatches(r, i, 6,
-                           detail::kdNodeChecksum(r.integer(i, 0), r.integer(i, 1), r.integer(i, 2),
-                                                  r.integer(i, 3), r.integer(i, 4), r.real(i, 5))))
-             find("kd_nodes",
-                  "(tree " + std::to_string(r.integer(i, 0)) + ", node " +
-                      std::to_string(r.integer(i, 1)) + ")",
-                  "fails its checksum");
+           if (!kdNodeMatches(r, i, 0))
+             find("kd_nodes", "(" + kdNodeName(r, i, 0) + ")", "fails its checksum");
          });
     if (!kd_rows_recorded)
       find("engine_state", std::string("'") + detail::kKdNodeRowsKey + "'", "is missing");
@@ -118,13 +127,9 @@ class PgChecker {
          "checksum FROM session_kd_nodes",
          [&](const detail::PgResult& r, int i) {
            ++counted[r.integer(i, 0)];
-           if (!sumMatches(r, i, 7,
-                           detail::kdNodeChecksum(r.integer(i, 1), r.integer(i, 2), r.integer(i, 3),
-                                                  r.integer(i, 4), r.integer(i, 5), r.real(i, 6))))
+           if (!kdNodeMatches(r, i, 1))
              find("session_kd_nodes",
-                  "(session " + std::to_string(r.integer(i, 0)) + ", tree " +
-                      std::to_string(r.integer(i, 1)) + ", node " +
-                      std::to_string(r.integer(i, 2)) + ")",
+                  "(session " + std::to_string(r.integer(i, 0)) + ", " + kdNodeName(r, i, 1) + ")",
                   "fails its checksum");
          });
     for (const auto& [session, text] : recorded)
