@@ -313,14 +313,12 @@ bool interpolateExtremum(const ResponseLayer& below, const ResponseLayer& middle
   return true;
 }
 
-// Keeps the sample at (r, c) of `middle` when it is a keypoint, as the loop of findExtremaRows()
-// asks: above the threshold, a strict maximum of its 3x3x3 neighbourhood, not edge-like, and
-// with an interpolated peak near it.
+// Keeps the sample at (r, c) of `middle`, above the threshold and a strict maximum of its 3x3x3
+// neighbourhood, when it is a keypoint: not edge-like, and with an interpolated peak near it.
 void offerSample(const IntegralImage& integral, const ResponseLayer& below,
                  const ResponseLayer& middle, const ResponseLayer& above, int octave,
                  float edge_ratio, int r, int c, std::vector<cv::KeyPoint>& found) {
   const float value = middle.at(r, c);
-  if (!isStrictMaximum(below, middle, above, r, c, value)) return;
   if (edge_ratio > 0 && isEdgeLike(integral, middle, r, c, value, edge_ratio)) return;
   cv::KeyPoint keypoint;
   if (interpolateExtremum(below, middle, above, r, c, octave, keypoint)) found.push_back(keypoint);
@@ -367,7 +365,7 @@ void findExtremaRows(const IntegralImage& integral, const ResponseLayer& below,
     int c = c0;
 #if defined(__SSE2__)
     // Four samples at a time: most fall under the threshold or below a neighbour, and those
-    // that pass go through the same scalar tests, in the same order, as the rest of the row.
+    // that pass go on to the same tests, in the same order, as the rest of the row.
     const __m128 threshold4 = _mm_set1_ps(threshold);
     for (; c + 4 <= c1 + 1; c += 4) {
       for (int bits = strictMaximaOfFour(below, middle, above, r, c, threshold4); bits != 0;
@@ -379,7 +377,7 @@ void findExtremaRows(const IntegralImage& integral, const ResponseLayer& below,
 #endif
     const float* row = &middle.det[static_cast<std::size_t>(r) * middle.cols];
     for (; c <= c1; ++c) {
-      if (!(row[c] > threshold)) continue;
+      if (!(row[c] > threshold) || !isStrictMaximum(below, middle, above, r, c, row[c])) continue;
       offerSample(integral, below, middle, above, octave, edge_ratio, r, c, found);
     }
   }
