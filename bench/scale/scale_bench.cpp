@@ -78,10 +78,16 @@ double percentile(std::vector<double> v, double p) {
 struct StageSums {
   std::vector<placedb::StageTimes> frames;
   std::vector<double> memory, storage;
-  void add(const placedb::StageTimes& t) {
-    frames.push_back(t);
-    memory.push_back(t.memory);
-    storage.push_back(t.storage);
+  std::size_t retrieved = 0, by_search = 0;  // tier moves, which grow with revisits
+  void add(const placedb::FrameResult& r) {
+    frames.push_back(r.times);
+    memory.push_back(r.times.memory);
+    storage.push_back(r.times.storage);
+    retrieved += r.retrieved;
+    by_search += r.retrieved_by_search;
+  }
+  double perFrame(std::size_t count) const {
+    return frames.empty() ? 0.0 : double(count) / double(frames.size());
   }
   double mean(double placedb::StageTimes::*stage) const {
     double sum = 0;
@@ -340,10 +346,10 @@ int main(int argc, char** argv) {
                flags.settings.empty() ? "" : " except --set", flags.map.string());
     fmt::print(
         "{:>7} {:>8} {:>8} {:>8} {:>6} {:>7} {:>8} {:>8} {:>9} {:>9} {:>9} {:>8} {:>6} {:>6} "
-        "{:>6} | {:>5} {:>5} {:>5} {:>5} {:>5} {:>5} {:>7} {:>7}\n",
+        "{:>6} | {:>5} {:>5} {:>5} {:>5} {:>5} {:>5} {:>7} {:>7} {:>5} {:>5}\n",
         "frames", "p50 ms", "p99 ms", "max ms", "wm", "ltm", "peakRSS", "curRSS", "B/locatn",
         "reopen ms", "query ms", "q found", "loops", "true", "listed", "feat", "quant", "filt",
-        "verif", "mem", "stor", "mem p99", "stor p99");
+        "verif", "mem", "stor", "mem p99", "stor p99", "retr", "srch");
     std::fflush(stdout);
 
     removeMap(flags.map);
@@ -360,7 +366,7 @@ int main(int argc, char** argv) {
       auto start = Clock::now();
       placedb::FrameResult r = map->process(image, i, "frame " + std::to_string(i));
       window_times.push_back(msBetween(start, Clock::now()));
-      stages.add(r.times);
+      stages.add(r);
       locations = std::max(locations, r.location_id);
       if (r.hypothesis.accepted) {
         ++accepted;
@@ -384,7 +390,7 @@ int main(int argc, char** argv) {
       fmt::print(
           "{:>7} {:>8.2f} {:>8.2f} {:>8.1f} {:>6} {:>7} {:>7.0f}M {:>7.0f}M {:>9.0f} "
           "{:>9.1f} {:>9.1f} {:>5}/{:<2} {:>6} {:>6} {:>6} | {:>5.2f} {:>5.2f} {:>5.2f} {:>5.2f} "
-          "{:>5.2f} {:>5.2f} {:>7.2f} {:>7.2f}\n",
+          "{:>5.2f} {:>5.2f} {:>7.2f} {:>7.2f} {:>5.2f} {:>5.2f}\n",
           i + 1, percentile(window_times, 50), percentile(window_times, 99),
           *std::max_element(window_times.begin(), window_times.end()), r.wm_size, ltm, peakRssMiB(),
           currentRssMiB(), double(mapBytes(flags.map)) / std::max<std::int64_t>(1, locations),
@@ -394,7 +400,8 @@ int main(int argc, char** argv) {
           stages.mean(&placedb::StageTimes::filter),
           stages.mean(&placedb::StageTimes::verification),
           stages.mean(&placedb::StageTimes::memory), stages.mean(&placedb::StageTimes::storage),
-          percentile(stages.memory, 99), percentile(stages.storage, 99));
+          percentile(stages.memory, 99), percentile(stages.storage, 99),
+          stages.perFrame(stages.retrieved), stages.perFrame(stages.by_search));
       std::fflush(stdout);
       window_times.clear();
       stages = StageSums();
