@@ -22,7 +22,7 @@ const std::map<std::string, std::set<std::string>>& allowedRooms() {
       {"features", {}},
       {"vocabulary", {"features"}},
       {"filter", {}},
-      {"memory", {}},
+      {"memory", {"features"}},  // its scan shares rows out by features/parallel_for.h
       {"geometry", {}},
       {"decision", {"filter", "geometry"}},
       {"map", {"features", "vocabulary", "filter", "memory", "geometry", "decision", "api"}},

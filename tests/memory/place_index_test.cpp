@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 
 #include "memory/place_code.h"
 #include "memory/place_index.h"
@@ -12,8 +13,9 @@
 namespace placedb {
 namespace {
 
-std::vector<std::int8_t> randomCode(std::size_t dim, std::mt19937& rng) {
-  std::uniform_int_distribution<int> byte(-128, 127);
+// Bytes from `lowest`: -127 gives codes as the encoder makes them, -128 any byte at all.
+std::vector<std::int8_t> randomCode(std::size_t dim, std::mt19937& rng, int lowest = -128) {
+  std::uniform_int_distribution<int> byte(lowest, 127);
   std::vector<std::int8_t> code(dim);
   for (auto& v : code) v = static_cast<std::int8_t>(byte(rng));
   return code;
@@ -53,6 +55,73 @@ TEST(PlaceIndex, CodeDotsAreEachCodesDot) {
     codeDots(query.data(), codes.data(), 9, dim, out.data());
     for (std::size_t r = 0; r < 9; ++r)
       EXPECT_EQ(out[r], codeDot(query.data(), codes.data() + r * dim, dim)) << dim << " row " << r;
+  }
+}
+
+TEST(PlaceIndex, EncodedCodeDotsAreEachCodesDot) {
+  std::mt19937 rng(3);
+  for (std::size_t dim : {256, 64, 32, 48}) {
+    for (std::size_t rows : {1, 4, 9}) {  // whole groups of four rows and a tail
+      const auto query = randomCode(dim, rng, -127);
+      std::vector<std::int8_t> codes;
+      for (std::size_t r = 0; r < rows; ++r) {
+        const auto c = randomCode(dim, rng, -127);
+        codes.insert(codes.end(), c.begin(), c.end());
+      }
+      // The extremes: every pair of products at 2 x 127^2, of either sign.
+      for (std::size_t d = 0; d < dim; ++d) codes[d] = query[d] < 0 ? -127 : 127;
+      ASSERT_TRUE(withinEncodedRange(codes.data(), codes.size()));
+      std::vector<std::int32_t> out(rows);
+      encodedCodeDots(query.data(), codes.data(), rows, dim, out.data());
+      for (std::size_t r = 0; r < rows; ++r)
+        EXPECT_EQ(out[r], codeDot(query.data(), codes.data() + r * dim, dim))
+            << dim << " row " << r << " of " << rows;
+    }
+  }
+  const std::vector<std::int8_t> lowest(32, -128);
+  EXPECT_FALSE(withinEncodedRange(lowest.data(), lowest.size()));
+}
+
+void expectSearchIsExact(const PlaceIndex& index,
+                         const std::vector<std::vector<std::int8_t>>& codes,
+                         const std::vector<std::int8_t>& query, const std::string& what) {
+  for (std::size_t k : {1, 5, 15}) {
+    const std::int64_t refused = 114;
+    const auto got = index.search(query, k, [](std::int64_t id) { return id != refused; });
+    const auto want = everyCode(codes, query, k, refused);
+    ASSERT_EQ(got.size(), want.size()) << what;
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      EXPECT_EQ(got[i].location, want[i].location) << what << " k " << k;
+      EXPECT_EQ(got[i].similarity, want[i].similarity) << what << " k " << k;
+    }
+  }
+}
+
+// The scan takes the cheaper multiply only while no code holds -128; replacing codes must keep
+// that count right, on one thread and on several.
+TEST(PlaceIndex, SearchIsExactAsCodesComeAndGoOutOfTheEncodedRange) {
+  std::mt19937 rng(4);
+  const std::size_t dim = 256;
+  for (int threads : {1, 2, 3}) {
+    std::vector<std::vector<std::int8_t>> codes;
+    PlaceIndex index;
+    index.setThreads(threads);
+    for (int i = 0; i < 5000; ++i) {  // several blocks of rows and a partial one
+      codes.push_back(randomCode(dim, rng, -127));
+      index.add(i + 1, codes.back());
+    }
+    const std::string on = std::to_string(threads) + " threads";
+    std::vector<std::int8_t> query = codes[4321];
+    query[0] = -100;        // the code's nearest query, negative where the code is -128
+    codes[4321][0] = -128;  // the one byte the cheaper multiply gets wrong against q < 0
+    index.add(4322, codes[4321]);
+    expectSearchIsExact(index, codes, query, on + ", one code holds -128");
+    codes[4321][0] = -127;
+    index.add(4322, codes[4321]);
+    expectSearchIsExact(index, codes, query, on + ", every code in range again");
+    expectSearchIsExact(index, codes, randomCode(dim, rng, -127), on + ", a random query");
+    query[7] = -128;
+    expectSearchIsExact(index, codes, query, on + ", a query holding -128");
   }
 }
 

@@ -114,10 +114,10 @@ struct Options {
   int temporal_max_gap = 4;             // frames since that closure (1 = the previous frame's)
 
   // --- running ---
-  // Worker threads of feature extraction and quantisation, 0 = one per hardware thread. The
-  // work is split so that results never depend on it: any value gives the same decisions. The
-  // threads beside the caller's start on first use and stay for the life of the process, shared
-  // by every map in it (a forked child starts its own).
+  // Worker threads of feature extraction, quantisation and the place-code scan, 0 = one per
+  // hardware thread. The work is split so that results never depend on it: any value gives the
+  // same decisions. The threads beside the caller's start on first use and stay for the life of
+  // the process, shared by every map in it (a forked child starts its own).
   int threads = 2;
 
   // --- camera intrinsics (optional) ---

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <set>
 
+#include "features/feature_options.h"
 #include "map/map_impl.h"
 #include "map/option_mapping.h"
 #include "placedb/version.h"
@@ -169,6 +170,7 @@ void MapImpl::restoreFromStore() {
   // Place codes of every tier, and the centres that made them.
   coder_.reset();
   places_.clear();
+  places_.setThreads(resolveThreadCount(options_.threads));
   place_neighbourhood_.reset();  // of the codes just cleared
   ltm_words_.reset();            // their words went with the vocabulary configure() replaced
   if (auto centres = store_->getState(kPlaceCoderKey)) {

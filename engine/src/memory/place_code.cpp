@@ -252,9 +252,60 @@ __attribute__((target("avx2"))) void codeDotsAvx2(const std::int8_t* query,
         _mm_cvtsi128_si32(_mm_add_epi32(pairs, _mm_shuffle_epi32(pairs, _MM_SHUFFLE(2, 3, 0, 1))));
   }
 }
+
+// sum + |q| . (c with q's sign), in eight 32-bit lanes.
+__attribute__((target("avx2"))) inline __m256i addEncodedProducts(__m256i sum, __m256i magnitude,
+                                                                  __m256i q, const std::int8_t* c) {
+  const __m256i signed_c =
+      _mm256_sign_epi8(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(c)), q);
+  return _mm256_add_epi32(
+      sum, _mm256_madd_epi16(_mm256_maddubs_epi16(magnitude, signed_c), _mm256_set1_epi16(1)));
+}
+
+// Four rows at a time, so each of the query's loads and signs serves four.
+__attribute__((target("avx2"))) void encodedCodeDotsAvx2(const std::int8_t* query,
+                                                         const std::int8_t* codes, std::size_t rows,
+                                                         std::size_t code_dim, std::int32_t* out) {
+  std::size_t r = 0;
+  for (; r + 4 <= rows; r += 4) {
+    const std::int8_t* row = codes + r * code_dim;
+    __m256i s0 = _mm256_setzero_si256(), s1 = s0, s2 = s0, s3 = s0;
+    for (std::size_t i = 0; i < code_dim; i += 32) {
+      const __m256i q = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(query + i));
+      const __m256i magnitude = _mm256_abs_epi8(q);
+      s0 = addEncodedProducts(s0, magnitude, q, row + i);
+      s1 = addEncodedProducts(s1, magnitude, q, row + code_dim + i);
+      s2 = addEncodedProducts(s2, magnitude, q, row + 2 * code_dim + i);
+      s3 = addEncodedProducts(s3, magnitude, q, row + 3 * code_dim + i);
+    }
+    // Lane sums: hadd twice leaves each row's two half-sums in the two 128-bit lanes.
+    const __m256i pairs = _mm256_hadd_epi32(_mm256_hadd_epi32(s0, s1), _mm256_hadd_epi32(s2, s3));
+    _mm_storeu_si128(
+        reinterpret_cast<__m128i*>(out + r),
+        _mm_add_epi32(_mm256_castsi256_si128(pairs), _mm256_extracti128_si256(pairs, 1)));
+  }
+  for (; r < rows; ++r) out[r] = codeDot(query, codes + r * code_dim, code_dim);
+}
 #endif
 
 }  // namespace
+
+bool withinEncodedRange(const std::int8_t* code, std::size_t code_dim) {
+  return std::find(code, code + code_dim, std::numeric_limits<std::int8_t>::min()) ==
+         code + code_dim;
+}
+
+void encodedCodeDots(const std::int8_t* query, const std::int8_t* codes, std::size_t rows,
+                     std::size_t code_dim, std::int32_t* out) {
+#if defined(PLACEDB_CODE_DOTS_AVX2)
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2 && code_dim % 32 == 0) {
+    encodedCodeDotsAvx2(query, codes, rows, code_dim, out);
+    return;
+  }
+#endif
+  codeDots(query, codes, rows, code_dim, out);
+}
 
 void codeDots(const std::int8_t* query, const std::int8_t* codes, std::size_t rows,
               std::size_t code_dim, std::int32_t* out) {

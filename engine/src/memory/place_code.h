@@ -68,6 +68,16 @@ std::int32_t codeDot(const std::int8_t* a, const std::int8_t* b, std::size_t cod
 void codeDots(const std::int8_t* query, const std::int8_t* codes, std::size_t rows,
               std::size_t code_dim, std::int32_t* out);
 
+// True when no byte of the code is -128: every code encode() makes, whose bytes are rounded
+// from [-127, 127], and so every code of a map.
+bool withinEncodedRange(const std::int8_t* code, std::size_t code_dim);
+
+// codeDots for a query and codes that are all withinEncodedRange: the same exact sums, twice the
+// bytes per multiply. |q| times c with q's sign, two products summed in 16 bits, cannot overflow
+// there (2 x 127 x 127 < 2^15), and -c is a byte for every such c.
+void encodedCodeDots(const std::int8_t* query, const std::int8_t* codes, std::size_t rows,
+                     std::size_t code_dim, std::int32_t* out);
+
 // Cosine similarity of two codes of the same length, in [-1, 1]; 0 when either is all zeros.
 double codeSimilarity(const std::int8_t* a, const std::int8_t* b, int code_dim);
 

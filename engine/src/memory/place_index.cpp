@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "features/parallel_for.h"
+
 #include "placedb/error.h"
 
 namespace placedb {
@@ -18,21 +20,27 @@ bool better(const PlaceMatch& a, const PlaceMatch& b) {
   return a.similarity != b.similarity ? a.similarity > b.similarity : a.location < b.location;
 }
 
-// The byte products of `code` with each of `count` stored codes, a block of rows at a time
-// (codeDots), handed to visit(row, product) in row order.
-template <typename Visit>
-void eachProduct(const std::int8_t* code, const std::int8_t* codes, std::size_t count,
-                 std::size_t dim, Visit&& visit) {
-  constexpr std::size_t kBlock = 1024;
-  std::int32_t dots[kBlock];
-  for (std::size_t start = 0; start < count; start += kBlock) {
-    const std::size_t rows = std::min(kBlock, count - start);
-    codeDots(code, codes + start * dim, rows, dim, dots);
-    for (std::size_t i = 0; i < rows; ++i) visit(start + i, dots[i]);
-  }
-}
-
 }  // namespace
+
+template <typename Visit>
+void PlaceIndex::eachProduct(const std::vector<std::int8_t>& code, Visit&& visit) const {
+  // Blocks of rows, on every thread at once: a map of 40k locations scans 10 MB of codes per
+  // frame, and the scan grows with the map while nothing else of a frame does.
+  constexpr std::size_t kBlock = 2048;
+  const std::size_t rows = ids_.size();
+  const bool encoded = rows_with_min_byte_ == 0 && withinEncodedRange(code.data(), dim_);
+  thread_local std::vector<std::int32_t> products;
+  products.resize(rows);
+  std::int32_t* out = products.data();
+  const int blocks = static_cast<int>((rows + kBlock - 1) / kBlock);
+  parallelFor(blocks, threads_, [&](int b) {
+    const std::size_t start = std::size_t(b) * kBlock;
+    const std::size_t count = std::min(kBlock, rows - start);
+    (encoded ? encodedCodeDots : codeDots)(code.data(), codes_.data() + start * dim_, count, dim_,
+                                           out + start);
+  });
+  for (std::size_t row = 0; row < rows; ++row) visit(row, out[row]);
+}
 
 void offerMatch(std::vector<PlaceMatch>& best, std::size_t k, const PlaceMatch& m,
                 const std::function<bool(std::int64_t)>& admit) {
@@ -51,8 +59,12 @@ void PlaceIndex::add(std::int64_t location, const std::vector<std::int8_t>& code
   auto [it, added] = row_.emplace(location, ids_.size());
   centre_.reset();
   if (sum_.size() != dim_) sum_.assign(dim_, 0);
-  if (!added)
-    for (std::size_t d = 0; d < dim_; ++d) sum_[d] -= codes_[it->second * dim_ + d];
+  if (!added) {
+    const std::int8_t* old = codes_.data() + it->second * dim_;
+    for (std::size_t d = 0; d < dim_; ++d) sum_[d] -= old[d];
+    rows_with_min_byte_ -= withinEncodedRange(old, dim_) ? 0 : 1;
+  }
+  rows_with_min_byte_ += withinEncodedRange(code.data(), dim_) ? 0 : 1;
   for (std::size_t d = 0; d < dim_; ++d) sum_[d] += code[d];
   if (added) {
     ids_.push_back(location);
@@ -71,6 +83,7 @@ void PlaceIndex::clear() {
   norms_.clear();
   row_.clear();
   sum_.clear();
+  rows_with_min_byte_ = 0;
   centre_.reset();
 }
 
@@ -107,12 +120,11 @@ std::vector<double> PlaceIndex::centredSimilarities(const std::vector<std::int8_
   if (q_norm2 <= 1e-9) return out;
   const double q_norm = std::sqrt(q_norm2);
   // (x - m).(q - m) = x.q - q.m - x.m + |m|^2: one byte product per row, as for the cosine.
-  eachProduct(code.data(), codes_.data(), ids_.size(), dim_,
-              [&](std::size_t row, std::int32_t product) {
-                if (c.centred_norm[row] == 0) return;
-                const double dot = double(product) - q_mean - c.dot_mean[row] + c.mean_norm2;
-                out[row] = dot / (q_norm * c.centred_norm[row]);
-              });
+  eachProduct(code, [&](std::size_t row, std::int32_t product) {
+    if (c.centred_norm[row] == 0) return;
+    const double dot = double(product) - q_mean - c.dot_mean[row] + c.mean_norm2;
+    out[row] = dot / (q_norm * c.centred_norm[row]);
+  });
   return out;
 }
 
@@ -135,16 +147,15 @@ std::vector<PlaceMatch> PlaceIndex::search(const std::vector<std::int8_t>& code,
   // Each row's cosine only where it may enter the k best: its product is at least the k-th
   // cosine times the two norms, less a margin far above the rounding of either side. The
   // cosines kept are the exact expression's.
-  eachProduct(
-      code.data(), codes_.data(), ids_.size(), dim_, [&](std::size_t row, std::int32_t product) {
-        if (norms_[row] == 0) return;
-        if (best.size() == k) {
-          const double scale = norms_[row] * query_norm;
-          const double bar = best.back().similarity * scale;
-          if (double(product) < bar - 1e-9 * (std::abs(bar) + scale)) return;
-        }
-        offerMatch(best, k, {ids_[row], double(product) / (norms_[row] * query_norm)}, admit);
-      });
+  eachProduct(code, [&](std::size_t row, std::int32_t product) {
+    if (norms_[row] == 0) return;
+    if (best.size() == k) {
+      const double scale = norms_[row] * query_norm;
+      const double bar = best.back().similarity * scale;
+      if (double(product) < bar - 1e-9 * (std::abs(bar) + scale)) return;
+    }
+    offerMatch(best, k, {ids_[row], double(product) / (norms_[row] * query_norm)}, admit);
+  });
   return best;
 }
 

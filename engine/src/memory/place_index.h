@@ -25,6 +25,10 @@ void offerMatch(std::vector<PlaceMatch>& best, std::size_t k, const PlaceMatch& 
 
 class PlaceIndex {
  public:
+  // Threads that share a scan of the codes (the caller's included); any count gives the same
+  // answers, since each thread only fills its own rows' products.
+  void setThreads(int threads) { threads_ = threads; }
+
   // Adds or replaces a location's code; every code of one index has the same length.
   void add(std::int64_t location, const std::vector<std::int8_t>& code);
   void clear();
@@ -58,7 +62,13 @@ class PlaceIndex {
   std::vector<std::int8_t> codes_;  // ids_.size() x dim_
   std::vector<double> norms_;
   std::unordered_map<std::int64_t, std::size_t> row_;
-  std::vector<std::int64_t> sum_;  // of every code, dim_ values: exact whatever the order
+  std::vector<std::int64_t> sum_;       // of every code, dim_ values: exact whatever the order
+  std::size_t rows_with_min_byte_ = 0;  // rows not withinEncodedRange (no encoder makes one)
+  int threads_ = 1;
+
+  // The byte product of `code` with every row, handed to visit(row, product) in row order.
+  template <typename Visit>
+  void eachProduct(const std::vector<std::int8_t>& code, Visit&& visit) const;
 
   // The mean code and, per row, its dot product with the mean and its centred norm: rebuilt by
   // the first centred search after a change (one pass over the codes).
