@@ -58,6 +58,7 @@ CREATE TABLE locations (
 );
 CREATE INDEX locations_by_tier ON locations (tier, weight);
 CREATE INDEX locations_by_session ON locations (session_id);
+CREATE INDEX locations_by_created_frame ON locations (created_frame);  -- schema 12
 
 -- Which frames a location stands for (several after STM merging).
 CREATE TABLE location_frames (
@@ -302,5 +303,5 @@ INSERT INTO engine_state (key, value, checksum) VALUES ('storage.kd_nodes.rows',
 
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 11;
+PRAGMA user_version = 12;
 COMMIT;

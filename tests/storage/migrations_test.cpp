@@ -5,6 +5,7 @@
 #include <fstream>
 #include <random>
 #include <regex>
+#include <set>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -88,6 +89,41 @@ TEST(Migrations, AllMigrationsEqualSchemaSql) {
   const auto expected = normalisedSchema(from_file);
   ASSERT_GT(expected.size(), 10u);
   EXPECT_EQ(normalisedSchema(migrated), expected);
+}
+
+// A frame's rows are written parent last (storage/src/sqlite_map_store.cpp, MapImpl::commit), so
+// each deferred foreign key is violated until its parent's insert, and at that insert SQLite looks
+// up the child rows naming the new parent. Without an index on the child column that look is a
+// scan of the whole child table, every frame: the map's cost would grow with its size.
+TEST(Migrations, EveryDeferredForeignKeyLeadsAnIndex) {
+  const auto dir = placedb::testing::scratchDir("EveryDeferredForeignKeyLeadsAnIndex");
+  const std::string path = (dir / "map.db").string();
+  buildMapAtVersion(path, currentSchemaVersion());
+  RawDb db(path);
+  int deferred = 0;
+  for (const std::string& table : db.rows("SELECT name FROM sqlite_master WHERE type = 'table'")) {
+    const std::string sql =
+        db.rows("SELECT sql FROM sqlite_master WHERE type = 'table' AND name = '" + table + "'")
+            .at(0);
+    std::set<std::string> leading;  // first column of each index, and an INTEGER PRIMARY KEY
+    for (const std::string& index : db.rows("SELECT name FROM pragma_index_list('" + table + "')"))
+      leading.insert(
+          db.rows("SELECT name FROM pragma_index_info('" + index + "') WHERE seqno = 0").at(0));
+    for (const std::string& pk : db.rows("SELECT name FROM pragma_table_info('" + table +
+                                         "') WHERE pk = 1 AND type = 'INTEGER'"))
+      leading.insert(pk);
+    for (const std::string& column :
+         db.rows("SELECT \"from\" FROM pragma_foreign_key_list('" + table + "')")) {
+      // The column's own line of the CREATE TABLE says whether its key is deferred.
+      const std::size_t at = sql.find("\n  " + column + " ");
+      ASSERT_NE(at, std::string::npos) << table << "." << column;
+      const std::string line = sql.substr(at + 1, sql.find('\n', at + 1) - at - 1);
+      if (line.find("DEFERRABLE INITIALLY DEFERRED") == std::string::npos) continue;
+      ++deferred;
+      EXPECT_TRUE(leading.count(column)) << table << "." << column << " is deferred, unindexed";
+    }
+  }
+  EXPECT_GE(deferred, 5);
 }
 
 TEST(Migrations, NewMapGetsCurrentVersionAndMark) {
