@@ -19,6 +19,7 @@
 // Rows are printed as each window ends, so a run stopped early still leaves its figures.
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <malloc.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -108,6 +109,14 @@ double currentRssMiB() {
   long pages_total = 0, pages_resident = 0;
   statm >> pages_total >> pages_resident;
   return pages_resident * (sysconf(_SC_PAGESIZE) / 1024.0) / 1024.0;
+}
+
+// The current resident set once the heap has handed its free pages back (malloc_trim): what the
+// writer holds live. The reader this benchmark opens beside it for the queries frees its memory
+// on close, but the heap keeps much of it, and curRSS swings by 100-200 MB with that.
+double liveRssMiB() {
+  malloc_trim(0);
+  return currentRssMiB();
 }
 
 std::uintmax_t mapBytes(const fs::path& map) {
@@ -345,11 +354,11 @@ int main(int argc, char** argv) {
     fmt::print("settings: wm_max={} (others default{}), map {}\n", flags.wm_max,
                flags.settings.empty() ? "" : " except --set", flags.map.string());
     fmt::print(
-        "{:>7} {:>8} {:>8} {:>8} {:>6} {:>7} {:>8} {:>8} {:>9} {:>9} {:>9} {:>8} {:>6} {:>6} "
+        "{:>7} {:>8} {:>8} {:>8} {:>6} {:>7} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>8} {:>6} {:>6} "
         "{:>6} | {:>5} {:>5} {:>5} {:>5} {:>5} {:>5} {:>7} {:>7} {:>5} {:>5}\n",
-        "frames", "p50 ms", "p99 ms", "max ms", "wm", "ltm", "peakRSS", "curRSS", "B/locatn",
-        "reopen ms", "query ms", "q found", "loops", "true", "listed", "feat", "quant", "filt",
-        "verif", "mem", "stor", "mem p99", "stor p99", "retr", "srch");
+        "frames", "p50 ms", "p99 ms", "max ms", "wm", "ltm", "peakRSS", "curRSS", "liveRSS",
+        "B/locatn", "reopen ms", "query ms", "q found", "loops", "true", "listed", "feat", "quant",
+        "filt", "verif", "mem", "stor", "mem p99", "stor p99", "retr", "srch");
     std::fflush(stdout);
 
     removeMap(flags.map);
@@ -387,14 +396,16 @@ int main(int argc, char** argv) {
       double reopen_ms = msBetween(reopen_start, Clock::now());
       QueryFigures q = measureQueries(flags, options, seq, i + 1);
       std::int64_t ltm = locations - static_cast<std::int64_t>(r.wm_size + r.stm_size);
+      const double current_rss = currentRssMiB();
       fmt::print(
-          "{:>7} {:>8.2f} {:>8.2f} {:>8.1f} {:>6} {:>7} {:>7.0f}M {:>7.0f}M {:>9.0f} "
+          "{:>7} {:>8.2f} {:>8.2f} {:>8.1f} {:>6} {:>7} {:>7.0f}M {:>7.0f}M {:>7.0f}M {:>9.0f} "
           "{:>9.1f} {:>9.1f} {:>5}/{:<2} {:>6} {:>6} {:>6} | {:>5.2f} {:>5.2f} {:>5.2f} {:>5.2f} "
           "{:>5.2f} {:>5.2f} {:>7.2f} {:>7.2f} {:>5.2f} {:>5.2f}\n",
           i + 1, percentile(window_times, 50), percentile(window_times, 99),
           *std::max_element(window_times.begin(), window_times.end()), r.wm_size, ltm, peakRssMiB(),
-          currentRssMiB(), double(mapBytes(flags.map)) / std::max<std::int64_t>(1, locations),
-          reopen_ms, q.p50, q.found, q.asked, accepted, accepted_true, accepted_listed,
+          current_rss, liveRssMiB(),
+          double(mapBytes(flags.map)) / std::max<std::int64_t>(1, locations), reopen_ms, q.p50,
+          q.found, q.asked, accepted, accepted_true, accepted_listed,
           stages.mean(&placedb::StageTimes::features),
           stages.mean(&placedb::StageTimes::quantisation),
           stages.mean(&placedb::StageTimes::filter),
