@@ -68,6 +68,41 @@ TEST(EpipolarFit, TheChanceLevelFollowsTheEvidence) {
   EXPECT_GT(epipolarLog10Nfa(8, 8, 1.0, size, 400), 0) << "8 pairs are 1 beyond a sample";
 }
 
+TEST(EpipolarFit, AConfidentFitStopsEarlyWithTheAgreementOfEveryDraw) {
+  // Comparing views (agreeing_place.h): once a sample of agreeing pairs was surely drawn, the
+  // model it gives holds the scene's pairs; the draws left could only add an outlier or two that
+  // lie near some line by chance.
+  const cv::Size2f size(240, 192);
+  for (int outliers : {0, 10, 25}) {
+    std::mt19937 rng(static_cast<unsigned>(40 + outliers));
+    const Pairs p = rigid(60, outliers, size, 0.3f, rng);
+    EpipolarFitSettings every;
+    every.stop_when_passed = false;
+    EpipolarFitSettings confident = every;
+    confident.confidence = 0.99;
+    const EpipolarFit full = fitEpipolar(p.a, p.b, size, every);
+    const EpipolarFit early = fitEpipolar(p.a, p.b, size, confident);
+    EXPECT_LE(early.most_within_max_error, full.most_within_max_error) << outliers << " outliers";
+    EXPECT_GE(early.most_within_max_error, 60 - outliers - 2) << outliers << " outliers";
+    EXPECT_TRUE(early.passed) << outliers << " outliers";
+    EXPECT_EQ(full.draws, every.iterations);
+    EXPECT_LT(early.draws, outliers == 0 ? 3 : full.draws) << outliers << " outliers";
+  }
+  // Unrelated pairs agree with no model beyond chance: the fit is never confident, and draws
+  // them all, as without the setting.
+  std::mt19937 rng(5);
+  const Pairs unrelated = noise(60, size, rng);
+  EpipolarFitSettings every;
+  every.stop_when_passed = false;
+  EpipolarFitSettings confident = every;
+  confident.confidence = 0.99;
+  const EpipolarFit full = fitEpipolar(unrelated.a, unrelated.b, size, every);
+  const EpipolarFit early = fitEpipolar(unrelated.a, unrelated.b, size, confident);
+  EXPECT_EQ(early.most_within_max_error, full.most_within_max_error);
+  EXPECT_EQ(early.log10_nfa, full.log10_nfa);
+  EXPECT_EQ(early.draws, full.draws);
+}
+
 TEST(EpipolarFit, IsDeterministic) {
   const cv::Size2f size(240, 192);
   std::mt19937 rng(9);

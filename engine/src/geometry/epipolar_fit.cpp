@@ -252,6 +252,13 @@ EpipolarFit fitEpipolar(const std::vector<cv::Point2f>& a, const std::vector<cv:
   std::vector<double> log_choose(static_cast<std::size_t>(n - kSample + 1));
   for (int j = 0; j <= n - kSample; ++j) log_choose[j] = log10Choose(n - kSample, j);
   const double pass_at = std::log10(settings.max_nfa);
+  // Whether `draws` samples find one of 7 agreeing pairs with the confidence asked for.
+  const double log_miss = settings.confidence > 0 ? std::log1p(-settings.confidence) : 0.0;
+  auto confident = [&](int draws) {
+    if (settings.confidence <= 0 || fit.most_within_max_error <= kSample) return false;
+    const double all_agree = std::pow(double(fit.most_within_max_error) / n, kSample);
+    return all_agree >= 1.0 || draws * std::log1p(-all_agree) <= log_miss;
+  };
   const double far_sq = settings.max_error_px * settings.max_error_px * (1 + 1e-6);
 
   std::mt19937 rng(0x5eedu + static_cast<unsigned>(n));
@@ -335,12 +342,14 @@ EpipolarFit fitEpipolar(const std::vector<cv::Point2f>& a, const std::vector<cv:
     }
     eliminate(systems, fresh);
     for (int j = 0, k = 0; j < batch; ++j) {
+      fit.draws = it + j + 1;
       if (repeat[j]) continue;
       Mat3 models[3];
       const int count = sevenPoint(systems[k++], models);
       for (int m = 0; m < count; ++m) evaluate(toPixels(models[m], na, nb));
       if ((settings.stop_when_passed && fit.log10_nfa <= pass_at) ||
-          (settings.stop_at_inliers > 0 && fit.most_within_max_error >= settings.stop_at_inliers)) {
+          (settings.stop_at_inliers > 0 && fit.most_within_max_error >= settings.stop_at_inliers) ||
+          confident(it + j + 1)) {
         stopped = true;
         break;
       }

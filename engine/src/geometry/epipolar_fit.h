@@ -29,6 +29,11 @@ struct EpipolarFitSettings {
   double max_error_px = 8;       // distances above this never count as agreement
   bool stop_when_passed = true;  // stop at the first model that passes (its NFA, not the best)
   int stop_at_inliers = 0;       // also stop once a model has this many pairs within max_error_px
+  // Also stop once the samples drawn would have drawn, with this probability, one sample of 7
+  // pairs all within max_error_px of the best model so far (RANSAC's adaptive count: N draws
+  // with log(1 - confidence) / log(1 - w^7), w that model's share of the pairs); 0 = off. For
+  // comparing the agreement of several views, where the best model need not be the last word.
+  double confidence = 0;
 };
 
 struct EpipolarFit {
@@ -39,6 +44,7 @@ struct EpipolarFit {
   std::vector<int> inlier_pairs;    // indices into the correspondences, ascending
   std::vector<int> agreeing_pairs;  // ... within max_error_px of that model, ascending
   int most_within_max_error = 0;    // the most pairs any model put within max_error_px
+  int draws = 0;                    // samples of 7 pairs drawn before the fit stopped
   bool passed = false;
 };
 
