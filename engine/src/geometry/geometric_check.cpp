@@ -168,7 +168,7 @@ Pairs descriptorPairs(const GeometricView& query, const GeometricView& candidate
 }
 
 GeometricResult fit(const Pairs& pairs, cv::Size2f extent, int keypoints,
-                    const GeometricCheckSettings& s) {
+                    const GeometricCheckSettings& s, double confidence = 0) {
   GeometricResult r;
   r.keypoints = keypoints;
   r.matches = static_cast<int>(pairs.a.size());
@@ -179,6 +179,7 @@ GeometricResult fit(const Pairs& pairs, cv::Size2f extent, int keypoints,
   const bool count = s.rule != GeometryRule::kNfa, chance = s.rule != GeometryRule::kInliers;
   fs.stop_when_passed = chance && !s.exhaustive;
   fs.stop_at_inliers = count && !s.exhaustive ? s.min_inliers : 0;
+  fs.confidence = confidence;
   const EpipolarFit f = fitEpipolar(pairs.a, pairs.b, extent, fs);
   r.log10_nfa = f.log10_nfa;
   r.inliers = count ? f.most_within_max_error : f.inliers;
@@ -222,14 +223,24 @@ GeometricResult fit(const Pairs& pairs, cv::Size2f extent, int keypoints,
   return r;
 }
 
+// The settings a check of `image_size`'s query runs with: the agreement distance of that size.
+GeometricCheckSettings forQuery(const GeometricCheckSettings& settings, cv::Size image_size) {
+  GeometricCheckSettings s = settings;
+  s.max_error_px = agreementDistance(settings, image_size);
+  return s;
+}
+
+int fewerKeypoints(const GeometricView& query, const GeometricView& candidate) {
+  return static_cast<int>(std::min(query.points.size(), candidate.points.size()));
+}
+
 }  // namespace
 
 GeometricResult checkGeometry(const GeometricView& query, const GeometricView& candidate,
                               const GeometricCheckSettings& settings) {
   const cv::Size2f extent = keypointExtent(candidate.points);
-  const int keypoints = static_cast<int>(std::min(query.points.size(), candidate.points.size()));
-  GeometricCheckSettings s = settings;
-  s.max_error_px = agreementDistance(settings, query.image_size);
+  const int keypoints = fewerKeypoints(query, candidate);
+  const GeometricCheckSettings s = forQuery(settings, query.image_size);
   const Pairs words = wordPairs(query, candidate);
   GeometricResult by_words = fit(words, extent, keypoints, s);
   if (by_words.passed) by_words.from_words = true;
@@ -237,6 +248,22 @@ GeometricResult checkGeometry(const GeometricView& query, const GeometricView& c
   const GeometricResult by_descriptors =
       fit(descriptorPairs(query, candidate, words, s.match_ratio), extent, keypoints, s);
   return strongerThan(by_words, by_descriptors, settings.rule) ? by_words : by_descriptors;
+}
+
+GeometricResult compareGeometry(const GeometricView& query, const GeometricView& candidate,
+                                const GeometricCheckSettings& settings, int at_least) {
+  GeometricCheckSettings s = forQuery(settings, query.image_size);
+  s.exhaustive = true;
+  const Pairs pairs =
+      descriptorPairs(query, candidate, wordPairs(query, candidate), settings.match_ratio);
+  if (static_cast<int>(pairs.a.size()) < at_least) {
+    GeometricResult bound;
+    bound.matches = bound.inliers = static_cast<int>(pairs.a.size());
+    bound.keypoints = fewerKeypoints(query, candidate);
+    return bound;
+  }
+  return fit(pairs, keypointExtent(candidate.points), fewerKeypoints(query, candidate), s,
+             kComparisonConfidence);
 }
 
 }  // namespace placedb

@@ -117,4 +117,18 @@ cv::Mat decodeDescriptors(const std::vector<std::uint8_t>& bytes, int dim);  // 
 GeometricResult checkGeometry(const GeometricView& query, const GeometricView& candidate,
                               const GeometricCheckSettings& settings);
 
+// The confidence of a comparison's fit: RANSAC's customary 0.99 (OpenCV's findFundamentalMat
+// default). A fit whose best model holds 60 % of the pairs stops after 163 of its 400 draws, one
+// that holds 80 % after 20.
+constexpr double kComparisonConfidence = 0.99;
+
+// How many pairs a candidate agrees on with the query, to compare places with one another
+// (decision/agreeing_place.h): one fit over the ratio matches and the word pairs they miss, with
+// no stop at the first pass but at kComparisonConfidence (epipolar_fit.h). Its `passed` is the
+// rule's verdict on those pairs. A candidate with fewer than `at_least` pairs cannot agree on
+// that many and is not fitted: its result counts every pair as agreeing, and does not pass.
+// Deterministic, as checkGeometry.
+GeometricResult compareGeometry(const GeometricView& query, const GeometricView& candidate,
+                                const GeometricCheckSettings& settings, int at_least = 0);
+
 }  // namespace placedb
