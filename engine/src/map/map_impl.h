@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "decision/agreeing_place.h"
 #include "features/feature_extractor.h"
 #include "filter/bayes_filter.h"
 #include "filter/inverted_index.h"
@@ -129,6 +130,9 @@ class MapImpl final : public Map {
   // The WM locations within reach of the last frame's match, sorted; empty when this frame does
   // not follow it or the check has no chance level (closure_evidence.h).
   std::vector<LocationId> continuingEvidence(std::int64_t frame_id) const;
+  // Of an accepted place and its traversal neighbours in WM, the one `query` agrees with best
+  // (agreeing_place.h).
+  std::optional<AgreeingPlace> agreeingPlace(LocationId accepted, const GeometricView& query);
   // A frame's own evidence for the run: its NFA, or at most geometry_max_nfa when it passed.
   double frameEvidence(const GeometricResult& g) const;
   // The relaxed rule (temporal_*) for a candidate near the last accepted closure.

@@ -123,6 +123,22 @@ std::vector<LocationId> MapImpl::nearLastClosure(std::int64_t frame_id) const {
   return near;
 }
 
+std::optional<AgreeingPlace> MapImpl::agreeingPlace(LocationId accepted,
+                                                    const GeometricView& query) {
+  const GeometricCheckSettings compare = toGeometricCheckSettings(options_);
+  const auto inWm = [this](LocationId id) { return tiers_->isIn(id, Tier::kWm); };
+  std::vector<LocationId> neighbours;
+  for (const auto& [id, depth] :
+       graph_.withinLinks(accepted, 1, inWm, LinkWalk::kNeighbourLinksOnly))
+    neighbours.push_back(id);
+  return mostAgreeingPlace(accepted, neighbours,
+                           [&](LocationId c, int at_least) -> std::optional<GeometricResult> {
+                             const CachedKeypoints& keypoints = keypointsOf(c);
+                             if (keypoints.points.empty()) return std::nullopt;
+                             return compareGeometry(query, viewOf(keypoints), compare, at_least);
+                           });
+}
+
 MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const Features& features,
                                             const std::vector<std::int64_t>& word_of_feature,
                                             const std::vector<LocationSimilarity>& similarities,
@@ -240,6 +256,14 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
       reported = choice.location;  // the frame's own best, as before
       result = &*choice.result;
     }
+  }
+  // The place an accepted closure names: the accepted one or a traversal neighbour that agrees
+  // with the frame on more pairs (agreeing_place.h). Its evidence stays the decision's.
+  std::optional<AgreeingPlace> agreeing;
+  if (outcome.accepted && v.passed) agreeing = agreeingPlace(reported, query);
+  if (agreeing && agreeing->location != reported) {
+    reported = agreeing->location;
+    result = &agreeing->result;
   }
   v.location = reported;
   v.geometry = *result;
