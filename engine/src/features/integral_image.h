@@ -16,6 +16,12 @@ namespace placedb {
 class IntegralImage {
  public:
   explicit IntegralImage(const cv::Mat& grey8);
+  // A table that goes is kept for the next one its thread builds (integral_image.cpp).
+  ~IntegralImage();
+  IntegralImage(IntegralImage&& other) noexcept = default;
+  IntegralImage& operator=(IntegralImage&& other) noexcept;
+  IntegralImage(const IntegralImage&) = delete;
+  IntegralImage& operator=(const IntegralImage&) = delete;
 
   int width() const { return width_; }
   int height() const { return height_; }
@@ -41,7 +47,7 @@ class IntegralImage {
 
  private:
   int width_ = 0, height_ = 0, stride_ = 1;
-  std::vector<std::uint32_t> table_;
+  std::vector<std::uint32_t> table_;  // at least (width + 1) x (height + 1) entries
 };
 
 }  // namespace placedb

@@ -65,8 +65,10 @@ void makeLayer(const IntegralImage& integral, int octave, int layer, ResponseLay
   out.last_col = integral.width() - 1 - half >= 0 ? (integral.width() - 1 - half) / out.step : -1;
   out.last_row = integral.height() - 1 - half >= 0 ? (integral.height() - 1 - half) / out.step : -1;
   // Samples where the filter does not fit are never read (extrema need the largest filter of
-  // their octave to fit), so the buffer's earlier values may stay there.
-  out.det.resize(static_cast<std::size_t>(out.rows) * out.cols);
+  // their octave to fit), so the buffer's earlier values may stay there. It never shrinks: a
+  // small image's second search at twice the size would zero the regrown part every frame.
+  const std::size_t cells = static_cast<std::size_t>(out.rows) * out.cols;
+  if (out.det.size() < cells) out.det.resize(cells);
 }
 
 // The integral table read with a step: entry (x, y) sits in plane x mod step, at column
@@ -96,7 +98,7 @@ SteppedTable steppedTable(const IntegralImage& integral, int step,
   const int rows = integral.height() + 1;
   t.width = (integral.stride() + step - 1) / step;
   t.plane_size = static_cast<std::size_t>(rows) * t.width;
-  planes.resize(t.plane_size * step);
+  if (planes.size() < t.plane_size * step) planes.resize(t.plane_size * step);  // as det's
   for (int residue = 0; residue < step; ++residue) {
     for (int y = 0; y < rows; ++y) {
       const std::uint32_t* from = integral.data() + static_cast<std::size_t>(y) * integral.stride();
