@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "features/parallel_for.h"
 
@@ -56,11 +57,18 @@ void PlaceIndex::add(std::int64_t location, const std::vector<std::int8_t>& code
     throw Error(ErrorCode::kInvalidArgument, "place code of location " + std::to_string(location) +
                                                  " has " + std::to_string(code.size()) +
                                                  " values, the index " + std::to_string(dim_));
-  auto [it, added] = row_.emplace(location, ids_.size());
+  const std::uint32_t* known = row_.find(location);
+  const bool added = !known;
+  const std::size_t row = added ? ids_.size() : *known;
+  if (added) {
+    if (ids_.size() >= std::numeric_limits<std::uint32_t>::max())
+      throw Error(ErrorCode::kInvalidArgument, "place codes: more locations than rows");
+    row_.insert(location, static_cast<std::uint32_t>(row));
+  }
   centre_.reset();
   if (sum_.size() != dim_) sum_.assign(dim_, 0);
   if (!added) {
-    const std::int8_t* old = codes_.data() + it->second * dim_;
+    const std::int8_t* old = codes_.data() + row * dim_;
     for (std::size_t d = 0; d < dim_; ++d) sum_[d] -= old[d];
     rows_with_min_byte_ -= withinEncodedRange(old, dim_) ? 0 : 1;
   }
@@ -71,8 +79,8 @@ void PlaceIndex::add(std::int64_t location, const std::vector<std::int8_t>& code
     codes_.insert(codes_.end(), code.begin(), code.end());
     norms_.push_back(norm(code.data(), dim_));
   } else {
-    std::copy(code.begin(), code.end(), codes_.begin() + std::ptrdiff_t(it->second * dim_));
-    norms_[it->second] = norm(code.data(), dim_);
+    std::copy(code.begin(), code.end(), codes_.begin() + std::ptrdiff_t(row * dim_));
+    norms_[row] = norm(code.data(), dim_);
   }
 }
 
@@ -81,7 +89,7 @@ void PlaceIndex::clear() {
   ids_.clear();
   codes_.clear();
   norms_.clear();
-  row_.clear();
+  row_ = LocationTable<std::uint32_t>();
   sum_.clear();
   rows_with_min_byte_ = 0;
   centre_.reset();
@@ -129,12 +137,12 @@ std::vector<double> PlaceIndex::centredSimilarities(const std::vector<std::int8_
 }
 
 double PlaceIndex::similarity(const std::vector<std::int8_t>& code, std::int64_t location) const {
-  auto it = row_.find(location);
-  if (it == row_.end() || code.size() != dim_) return 0.0;
+  const std::uint32_t* row = row_.find(location);
+  if (!row || code.size() != dim_) return 0.0;
   const double n = norm(code.data(), dim_);
-  if (n == 0 || norms_[it->second] == 0) return 0.0;
-  const std::int8_t* stored = codes_.data() + it->second * dim_;
-  return double(codeDot(stored, code.data(), dim_)) / (norms_[it->second] * n);
+  if (n == 0 || norms_[*row] == 0) return 0.0;
+  const std::int8_t* stored = codes_.data() + std::size_t{*row} * dim_;
+  return double(codeDot(stored, code.data(), dim_)) / (norms_[*row] * n);
 }
 
 std::vector<PlaceMatch> PlaceIndex::search(const std::vector<std::int8_t>& code, std::size_t k,
