@@ -396,13 +396,10 @@ void MapImpl::restoreWords(std::vector<std::int64_t> missing,
 void MapImpl::bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write,
                         FrameResult& result) {
   if (ids.empty()) return;
-  auto refs = store_->loadWordRefs(ids);
+  auto signatures = store_->loadWordIds(ids);
   std::vector<std::int64_t> missing;
   for (std::int64_t id : ids) {
-    std::vector<WordId> words;
-    words.reserve(refs[id].size());
-    for (const auto& ref : refs[id]) words.push_back(ref.word_id);
-    for (WordId word : index_.add(id, Signature::fromWords(std::move(words))).referenced)
+    for (WordId word : index_.add(id, Signature::fromWords(std::move(signatures[id]))).referenced)
       if (!vocabulary_->contains(word)) missing.push_back(word);
   }
   restoreWords(std::move(missing), ids);
