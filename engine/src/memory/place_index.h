@@ -5,6 +5,7 @@
 // 256 M byte products; see bench/quality/README.md for the measured cost.
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -60,12 +61,22 @@ class PlaceIndex {
  private:
   std::size_t dim_ = 0;
   std::vector<std::int64_t> ids_;
-  std::vector<std::int8_t> codes_;  // ids_.size() x dim_
+  // The codes, kChunkRows rows a chunk: a growing map never copies them all to a larger block
+  // (10 MB at 42k locations, within one frame), nor keeps up to as much again of room unused.
+  static constexpr std::size_t kChunkRows = 2048;
+  std::vector<std::unique_ptr<std::int8_t[]>> chunks_;
   std::vector<double> norms_;
   LocationTable<std::uint32_t> row_;    // every location's row: flat (location_table.h)
   std::vector<std::int64_t> sum_;       // of every code, dim_ values: exact whatever the order
   std::size_t rows_with_min_byte_ = 0;  // rows not withinEncodedRange (no encoder makes one)
   int threads_ = 1;
+
+  const std::int8_t* rowData(std::size_t row) const {
+    return chunks_[row / kChunkRows].get() + (row % kChunkRows) * dim_;
+  }
+  std::int8_t* rowData(std::size_t row) {
+    return chunks_[row / kChunkRows].get() + (row % kChunkRows) * dim_;
+  }
 
   // The byte product of `code` with every row, handed to visit(row, product) in row order.
   template <typename Visit>
