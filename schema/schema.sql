@@ -1,4 +1,4 @@
--- placedb map schema: the current version (11), as one file.
+-- placedb map schema: the current version (13), as one file.
 -- It must equal the result of applying migrations/0001..N in order; a test compares
 -- sqlite_master of both. `sqlite3 new.db < schema/schema.sql` makes an empty placedb map.
 -- See schema/SCHEMA.md for the meaning of every table, column and view.
@@ -298,10 +298,22 @@ CREATE TABLE session_memory (
   PRIMARY KEY (session_id, location_id)
 ) WITHOUT ROWID;
 
+-- The descriptors of each location's words, stored beside it (schema 13): bringing the location
+-- back from long-term memory reads this one row instead of its words scattered over the words
+-- table. Copies of words rows, written with the location and never changed; `words` holds, for
+-- the location's distinct words that were not imported, ascending: every word id (int64), then
+-- every created frame (int64, -1 for none), then every descriptor (dim float32), little-endian.
+CREATE TABLE location_word_descriptors (
+  location_id INTEGER PRIMARY KEY REFERENCES locations (id) ON DELETE CASCADE,
+  dim INTEGER NOT NULL CHECK (dim > 0),
+  words BLOB NOT NULL CHECK (length(words) % (16 + 4 * dim) = 0),
+  checksum INTEGER                   -- CRC-32C of location_id, dim and words
+);
+
 -- kd_nodes' row count, with its CRC-32C (schema 8): an empty map has no kd-forest nodes.
 INSERT INTO engine_state (key, value, checksum) VALUES ('storage.kd_nodes.rows', '0', 4094527944);
 
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 12;
+PRAGMA user_version = 13;
 COMMIT;

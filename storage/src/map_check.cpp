@@ -19,6 +19,7 @@ namespace {
 
 // The first schema with fleet maps' tables (side sessions a copy may bring).
 constexpr int kFleetSchemaVersion = 11;
+constexpr int kLocationWordsSchemaVersion = 13;
 
 using detail::Database;
 using detail::Statement;
@@ -144,6 +145,22 @@ class Checker {
                " (rows were deleted or added)");
   }
 
+  // The copies of each location's words (schema 13).
+  void locationWordDescriptors() {
+    rows("location_word_descriptors",
+         "SELECT location_id, dim, words, checksum FROM location_word_descriptors",
+         [&](const Statement& s) {
+           const std::int64_t id = s.columnInt(0);
+           const auto [data, size] = s.columnBlobView(2);
+           if (!detail::checksumMatches(
+                   s, 3, detail::locationWordDescriptorsChecksum(id, s.columnInt(1), data, size)))
+             return find("location_word_descriptors", std::to_string(id), "fails its checksum");
+           const std::string fault =
+               detail::locationWordDescriptorsFault(id, s.columnInt(1), data, size);
+           if (!fault.empty()) find("location_word_descriptors", std::to_string(id), fault);
+         });
+  }
+
   // Side sessions a copy of a fleet map brought (schema 11): their own engine state and
   // kd-forest, with each session's forest row count, as the main line's.
   void sideSessions() {
@@ -254,6 +271,7 @@ CheckReport checkMap(const std::string& given_path, const CheckOptions& options)
     checker.foreignKeys();
     if (report.checksums) checker.checksums();
     if (report.schema_version >= kFleetSchemaVersion) checker.sideSessions();
+    if (report.schema_version >= kLocationWordsSchemaVersion) checker.locationWordDescriptors();
     checker.values();
     if (report.ok() && options.last_check && report.schema_version == currentSchemaVersion()) {
       if (options.progress) options.progress({"engine state", 0, 0});

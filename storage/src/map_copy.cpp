@@ -69,6 +69,7 @@ const std::vector<TableColumns>& mapTables() {
        {"tree", "node", "left_child", "right_child", "split_dim", "split_value", "checksum"},
        2},
       {"place_codes", {"location_id", "code", "checksum"}},
+      {"location_word_descriptors", {"location_id", "dim", "words", "checksum"}},
       {"wm_entries", {"location_id", "wm_age"}},
       // Fleet maps (schema 11): the id allocator and the side sessions' own memory.
       {"id_blocks", {"kind", "next"}},

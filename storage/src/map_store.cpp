@@ -1,6 +1,9 @@
-// MapStore's backend-neutral parts: transactions over a TransactionControl, and the factory
-// that picks a backend from the map's name.
+// MapStore's backend-neutral parts: transactions over a TransactionControl, reading a location's
+// words back, and the factory that picks a backend from the map's name.
 #include "placedb/storage/map_store.h"
+
+#include <algorithm>
+#include <cstring>
 
 #include "pg_map_store.h"
 #include "placedb/storage/migrations.h"
@@ -19,6 +22,54 @@ std::unique_ptr<MapStore> openMapStore(const std::string& map, OpenMode mode,
 }
 
 int MapStore::currentSchemaVersion() { return storage::currentSchemaVersion(); }
+
+void MapStore::loadLocationDescriptors(const std::vector<std::int64_t>& location_ids,
+                                       const std::vector<std::int64_t>& word_ids, int dim,
+                                       float* rows, std::int64_t* created) const {
+  if (!std::is_sorted(word_ids.begin(), word_ids.end()))
+    throw StorageError(ErrorCode::kInvalidArgument, "loadLocationDescriptors: ids must be sorted");
+  const std::size_t row_floats = static_cast<std::size_t>(dim);
+  std::vector<char> found(word_ids.size(), 0);
+  for (const LocationWordDescriptors& stored : locationWordDescriptors(location_ids)) {
+    if (stored.dim != dim)
+      throw StorageError(ErrorCode::kMapRefused,
+                         "map " + path() + ": the word descriptors of location " +
+                             std::to_string(stored.location_id) + " are not of dimension " +
+                             std::to_string(dim));
+    // Both lists ascend.
+    std::size_t i = 0, j = 0;
+    while (i < word_ids.size() && j < stored.word_ids.size()) {
+      if (word_ids[i] < stored.word_ids[j]) {
+        ++i;
+      } else if (stored.word_ids[j] < word_ids[i]) {
+        ++j;
+      } else {
+        if (!found[i]) {
+          std::memcpy(rows + i * row_floats, stored.descriptors.data() + j * row_floats,
+                      row_floats * sizeof(float));
+          created[i] = stored.created_frames[j];
+          found[i] = 1;
+        }
+        ++i;
+        ++j;
+      }
+    }
+  }
+  // Locations made before schema 13 have no row; imported words are in none.
+  std::vector<std::int64_t> rest;
+  for (std::size_t i = 0; i < word_ids.size(); ++i)
+    if (!found[i]) rest.push_back(word_ids[i]);
+  if (rest.empty()) return;
+  std::vector<float> rest_rows(rest.size() * row_floats);
+  std::vector<std::int64_t> rest_created(rest.size());
+  loadFloatDescriptors(rest, dim, rest_rows.data(), rest_created.data());
+  for (std::size_t i = 0, k = 0; i < word_ids.size(); ++i) {
+    if (found[i]) continue;
+    std::memcpy(rows + i * row_floats, rest_rows.data() + k * row_floats,
+                row_floats * sizeof(float));
+    created[i] = rest_created[k++];
+  }
+}
 
 // ---- Transaction ----
 

@@ -77,6 +77,19 @@ class PgChecker {
            if (!sumMatches(r, i, 2, detail::placeCodeChecksum(r.integer(i, 0), data, size)))
              find("place_codes", std::to_string(r.integer(i, 0)), "fails its checksum");
          });
+    rows(
+        "location_word_descriptors",
+        "SELECT location_id, dim, words, checksum FROM location_word_descriptors",
+        [&](const detail::PgResult& r, int i) {
+          const std::int64_t id = r.integer(i, 0);
+          const auto [data, size] = r.bytes(i, 2);
+          if (!sumMatches(r, i, 3,
+                          detail::locationWordDescriptorsChecksum(id, r.integer(i, 1), data, size)))
+            return find("location_word_descriptors", std::to_string(id), "fails its checksum");
+          const std::string fault =
+              detail::locationWordDescriptorsFault(id, r.integer(i, 1), data, size);
+          if (!fault.empty()) find("location_word_descriptors", std::to_string(id), fault);
+        });
     std::string kd_rows_text;
     bool kd_rows_recorded = false;
     rows("engine_state", "SELECT key, value, checksum FROM engine_state",

@@ -93,6 +93,9 @@ class PgMapStore final : public MapStore {
   // created[i]. A word that is missing, or of another type or dimension, is kMapRefused.
   void loadFloatDescriptors(const std::vector<std::int64_t>& word_ids, int dim, float* rows,
                             std::int64_t* created) const override;
+  void putLocationWordDescriptors(const LocationWordDescriptors& words) override;
+  std::vector<LocationWordDescriptors> locationWordDescriptors(
+      const std::vector<std::int64_t>& location_ids) const override;
   std::int64_t wordCount() const override;
   std::optional<std::int64_t> maxWordId() const override;
   // Words of imported vocabularies, ascending: they stay in the index whatever the tiers do.

@@ -136,6 +136,48 @@ void PgMapStore::loadFloatDescriptors(const std::vector<std::int64_t>& word_ids,
   }
 }
 
+void PgMapStore::putLocationWordDescriptors(const LocationWordDescriptors& words) {
+  auto scope = writeScope();
+  const std::vector<std::uint8_t> bytes = words.encode();
+  db_->send(
+      "INSERT INTO location_word_descriptors (location_id, dim, words, checksum) "
+      "VALUES ($1, $2, $3, $4) ON CONFLICT (location_id) DO UPDATE SET dim = excluded.dim, "
+      "words = excluded.words, checksum = excluded.checksum",
+      detail::PgParams()
+          .add(words.location_id)
+          .add(std::int64_t{words.dim})
+          .addBytes(bytes.data(), bytes.size())
+          .add(std::int64_t{detail::locationWordDescriptorsChecksum(words.location_id, words.dim,
+                                                                    bytes.data(), bytes.size())}));
+  scope.commit();
+}
+
+std::vector<LocationWordDescriptors> PgMapStore::locationWordDescriptors(
+    const std::vector<std::int64_t>& location_ids) const {
+  const auto r = db_->run(
+      "SELECT location_id, dim, words, checksum FROM location_word_descriptors "
+      "WHERE location_id = ANY($1)",
+      detail::PgParams().addArray(location_ids));
+  std::unordered_map<std::int64_t, int> row_of;
+  for (int i = 0; i < r.rows(); ++i) row_of[r.integer(i, 0)] = i;
+  std::vector<LocationWordDescriptors> out;
+  for (std::int64_t id : location_ids) {
+    const auto found = row_of.find(id);
+    if (found == row_of.end()) continue;
+    const int i = found->second;
+    const std::int64_t dim = r.integer(i, 1);
+    const auto [data, size] = r.bytes(i, 2);
+    const std::string row = std::to_string(id);
+    if (!sumMatches(r, i, 3, detail::locationWordDescriptorsChecksum(id, dim, data, size)))
+      detail::refuseDamagedRow(label_, "location_word_descriptors", row, "fails its checksum");
+    LocationWordDescriptors words;
+    const std::string fault = detail::locationWordDescriptorsFault(id, dim, data, size, &words);
+    if (!fault.empty()) detail::refuseDamagedRow(label_, "location_word_descriptors", row, fault);
+    out.push_back(std::move(words));
+  }
+  return out;
+}
+
 std::int64_t PgMapStore::wordCount() const {
   return db_->run("SELECT count(*) FROM words").integer(0, 0);
 }

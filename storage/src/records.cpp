@@ -1,6 +1,8 @@
 #include "placedb/storage/records.h"
 
+#include <algorithm>
 #include <cstring>
+#include <functional>
 
 #include "placedb/error.h"
 
@@ -42,6 +44,41 @@ std::vector<float> WordRecord::floats() const {
   std::vector<float> values(static_cast<std::size_t>(dim));
   std::memcpy(values.data(), descriptor.data(), descriptor.size());
   return values;
+}
+
+std::vector<std::uint8_t> LocationWordDescriptors::encode() const {
+  const std::size_t n = word_ids.size();
+  std::vector<std::uint8_t> bytes(n * (2 * sizeof(std::int64_t)) + descriptors.size() * 4);
+  std::uint8_t* at = bytes.data();
+  auto put = [&at](const void* data, std::size_t size) {
+    if (size) std::memcpy(at, data, size);
+    at += size;
+  };
+  put(word_ids.data(), n * sizeof(std::int64_t));
+  put(created_frames.data(), n * sizeof(std::int64_t));
+  put(descriptors.data(), descriptors.size() * sizeof(float));
+  return bytes;
+}
+
+bool LocationWordDescriptors::decode(std::int64_t location, int dimension, const std::uint8_t* data,
+                                     std::size_t size) {
+  const std::size_t per_word = 2 * sizeof(std::int64_t) + std::size_t(dimension) * sizeof(float);
+  if (dimension <= 0 || size % per_word != 0) return false;
+  const std::size_t n = size / per_word;
+  std::vector<std::int64_t> ids(n), created(n);
+  std::vector<float> values(n * std::size_t(dimension));
+  if (n) {
+    std::memcpy(ids.data(), data, n * sizeof(std::int64_t));
+    std::memcpy(created.data(), data + n * sizeof(std::int64_t), n * sizeof(std::int64_t));
+    std::memcpy(values.data(), data + 2 * n * sizeof(std::int64_t), values.size() * sizeof(float));
+  }
+  if (std::adjacent_find(ids.begin(), ids.end(), std::greater_equal<>()) != ids.end()) return false;
+  location_id = location;
+  dim = dimension;
+  word_ids = std::move(ids);
+  created_frames = std::move(created);
+  descriptors = std::move(values);
+  return true;
 }
 
 }  // namespace placedb::storage

@@ -4,7 +4,9 @@
 // its crc_optimal is the reference implementation the CRC-32C parameters below come from.
 #include <boost/crc.hpp>
 
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <vector>
 #if defined(__GNUC__) && defined(__x86_64__)
 #include <nmmintrin.h>
@@ -94,6 +96,28 @@ std::uint32_t placeCodeChecksum(std::int64_t location_id, const void* code, std:
   addInt(crc, location_id);
   if (size) crc.process_bytes(code, size);
   return crc.checksum();
+}
+
+std::uint32_t locationWordDescriptorsChecksum(std::int64_t location_id, std::int64_t dim,
+                                              const void* words, std::size_t size) {
+  Crc32c crc;
+  addInt(crc, location_id);
+  addInt(crc, dim);
+  if (size) crc.process_bytes(words, size);
+  return crc.checksum();
+}
+
+std::string locationWordDescriptorsFault(std::int64_t location_id, std::int64_t dim,
+                                         const std::uint8_t* words, std::size_t size,
+                                         LocationWordDescriptors* out) {
+  LocationWordDescriptors decoded;
+  if (dim <= 0 || dim > std::numeric_limits<int>::max() ||
+      !decoded.decode(location_id, static_cast<int>(dim), words, size))
+    return "does not hold ascending words of its dimension";
+  for (float value : decoded.descriptors)
+    if (!std::isfinite(value)) return "holds a value that is not a finite number";
+  if (out) *out = std::move(decoded);
+  return "";
 }
 
 std::uint32_t stateChecksum(const std::string& key, const void* value, std::size_t size) {

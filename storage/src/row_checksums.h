@@ -14,6 +14,8 @@
 #include <optional>
 #include <string>
 
+#include "placedb/storage/records.h"
+
 namespace placedb::storage::detail {
 
 class Database;
@@ -28,9 +30,17 @@ std::uint32_t wordChecksum(std::int64_t id, std::optional<std::int64_t> created_
                            std::int64_t descriptor_type, std::int64_t dim,
                            const std::uint8_t* descriptor, std::size_t size);
 std::uint32_t placeCodeChecksum(std::int64_t location_id, const void* code, std::size_t size);
+std::uint32_t locationWordDescriptorsChecksum(std::int64_t location_id, std::int64_t dim,
+                                              const void* words, std::size_t size);
 std::uint32_t stateChecksum(const std::string& key, const void* value, std::size_t size);
 std::uint32_t kdNodeChecksum(std::int64_t tree, std::int64_t node, std::int64_t left,
                              std::int64_t right, std::int64_t split_dim, double split_value);
+
+// What is wrong with a location_word_descriptors row's words beyond its checksum, or "" when they
+// decode to ascending words of `dim` finite values (then into `out`, when given).
+std::string locationWordDescriptorsFault(std::int64_t location_id, std::int64_t dim,
+                                         const std::uint8_t* words, std::size_t size,
+                                         LocationWordDescriptors* out = nullptr);
 
 // True when column `column` of the current row holds `computed` (a NULL never matches: every row
 // of a schema-8 map has its sum).

@@ -132,6 +132,45 @@ void SqliteMapStore::loadFloatDescriptors(const std::vector<std::int64_t>& word_
   }
 }
 
+void SqliteMapStore::putLocationWordDescriptors(const LocationWordDescriptors& words) {
+  auto scope = writeScope();
+  const std::vector<std::uint8_t> bytes = words.encode();
+  auto s = db_->cached(
+      "INSERT OR REPLACE INTO location_word_descriptors (location_id, dim, words, checksum) "
+      "VALUES (?1, ?2, ?3, ?4)");
+  s->bind(1, words.location_id);
+  s->bind(2, std::int64_t{words.dim});
+  s->bindBlob(3, bytes.data(), bytes.size());
+  s->bind(4, std::int64_t{detail::locationWordDescriptorsChecksum(words.location_id, words.dim,
+                                                                  bytes.data(), bytes.size())});
+  s->run();
+  scope.commit();
+}
+
+std::vector<LocationWordDescriptors> SqliteMapStore::locationWordDescriptors(
+    const std::vector<std::int64_t>& location_ids) const {
+  auto s = db_->cached(
+      "SELECT dim, words, checksum FROM location_word_descriptors WHERE location_id = ?1");
+  std::vector<LocationWordDescriptors> result;
+  for (std::int64_t id : location_ids) {
+    s->reset();
+    s->bind(1, id);
+    if (!s->step()) continue;
+    const auto [data, size] = s->columnBlobView(1);
+    const std::int64_t dim = s->columnInt(0);
+    if (!detail::checksumMatches(*s, 2,
+                                 detail::locationWordDescriptorsChecksum(id, dim, data, size)))
+      detail::refuseDamagedRow(path_, "location_word_descriptors", std::to_string(id),
+                               "fails its checksum");
+    LocationWordDescriptors words;
+    const std::string fault = detail::locationWordDescriptorsFault(id, dim, data, size, &words);
+    if (!fault.empty())
+      detail::refuseDamagedRow(path_, "location_word_descriptors", std::to_string(id), fault);
+    result.push_back(std::move(words));
+  }
+  return result;
+}
+
 std::int64_t SqliteMapStore::wordCount() const {
   auto s = db_->cached("SELECT count(*) FROM words");
   s->step();

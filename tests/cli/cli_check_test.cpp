@@ -148,7 +148,7 @@ Damage damageOnce(const fs::path& map, std::mt19937_64& rng) {
     bytes[pick(bytes.size())] ^= static_cast<char>(1u << pick(8));
     return bytes;
   };
-  switch (pick(6)) {
+  switch (pick(7)) {
     case 0: {  // one bit of a word's descriptor
       auto words = edit.rows("SELECT id, descriptor FROM words");
       const auto& [id, bytes] = words[pick(words.size())];
@@ -200,6 +200,15 @@ Damage damageOnce(const fs::path& map, std::mt19937_64& rng) {
                      where + " AND ?1 = ?1 AND ?2 = ?2",
                  "", "");
       return {"kd_nodes", (child ? "child of node " : "split of node ") + id, true};
+    }
+    case 5: {  // one bit of the words kept beside a location
+      auto rows = edit.rows("SELECT location_id, words FROM location_word_descriptors");
+      const auto& [id, bytes] = rows[pick(rows.size())];
+      edit.write(
+          "UPDATE location_word_descriptors SET words = ?2 WHERE location_id = CAST(?1 AS INTEGER)",
+          id, flip(bytes));
+      // Read when the location comes back from long-term memory, not at open.
+      return {"location_word_descriptors", "bit of location " + id + "'s words", false};
     }
     default: {  // a kd-forest node deleted
       auto nodes = edit.rows("SELECT tree || ',' || node, '' FROM kd_nodes");

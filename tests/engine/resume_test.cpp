@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <cstring>
 #include <functional>
 
@@ -93,6 +94,51 @@ TEST_P(ResumeTest, StoppedEveryTenthFrameEqualsStraightRun) {
     EXPECT_GT(found, 0u) << "the LTM search must bring places back, or its resume is untested";
     for (const auto& o : straight) EXPECT_LE(o.wm, static_cast<std::size_t>(GetParam()));
   }
+}
+
+// Every location's words beside it (schema 13) are copies of its words' rows: the distinct words of
+// its signature, with their descriptors and created frames as the words table holds them.
+void expectWordRowsCopyWords(const std::string& path) {
+  storage::SqliteMapStore store(path, storage::OpenMode::kReadOnly);
+  std::vector<std::int64_t> locations;
+  for (auto tier : {storage::Tier::kStm, storage::Tier::kWm, storage::Tier::kLtm})
+    for (const auto& location : store.locationsInTier(tier)) locations.push_back(location.id);
+  EXPECT_GT(locations.size(), 5u);
+  for (std::int64_t id : locations) {
+    const auto stored = store.locationWordDescriptors({id});
+    ASSERT_EQ(stored.size(), 1u) << "location " << id;
+    std::vector<std::int64_t> words;
+    for (const auto& ref : store.loadWordRefs(id)) words.push_back(ref.word_id);
+    std::sort(words.begin(), words.end());
+    words.erase(std::unique(words.begin(), words.end()), words.end());
+    ASSERT_EQ(stored[0].word_ids, words) << "location " << id;
+    std::vector<float> descriptors(words.size() * 64);
+    std::vector<std::int64_t> created(words.size());
+    store.loadFloatDescriptors(words, 64, descriptors.data(), created.data());
+    EXPECT_EQ(stored[0].descriptors, descriptors) << "location " << id;
+    EXPECT_EQ(stored[0].created_frames, created) << "location " << id;
+  }
+}
+
+// Locations without their words beside them, as in a map made before schema 13, are brought back
+// from the words table: the same decisions.
+TEST_P(ResumeTest, LocationsWithoutWordRowsResumeExactly) {
+  if (GetParam() == 0) GTEST_SKIP() << "nothing is brought back without a bound";
+  Options options;
+  options.wm_max = GetParam();
+  auto straight = run("straight_rows" + std::to_string(GetParam()), options, 0, false);
+  int closes = 0;
+  auto without = run("without_rows" + std::to_string(GetParam()), options, 20, true,
+                     [&closes](const std::string& path) {
+                       if (++closes == 1) expectWordRowsCopyWords(path);
+                       sqlite3* db = nullptr;
+                       ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+                       EXPECT_EQ(sqlite3_exec(db, "DELETE FROM location_word_descriptors", nullptr,
+                                              nullptr, nullptr),
+                                 SQLITE_OK);
+                       sqlite3_close(db);
+                     });
+  expectSame(straight, without);
 }
 
 // Rewrites a closed map as schema 2 stored it: the kd-forest as a split log in engine_state
@@ -204,6 +250,7 @@ void downgradeToSchemaTwo(const std::string& path) {
        {"session_memory", "session_posterior", "session_kd_nodes", "session_state", "id_blocks"})
     exec(std::string("DROP TABLE ") + table);     // schema 11
   exec("DROP INDEX locations_by_created_frame");  // schema 12
+  exec("DROP TABLE location_word_descriptors");   // schema 13
   exec("PRAGMA user_version = 2");
   exec("COMMIT");
   sqlite3_close(db);

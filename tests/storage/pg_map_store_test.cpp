@@ -173,6 +173,13 @@ TEST(PgMapStore, DamagedRowsAreRefusedOnReadAndListedByCheck) {
     for (int i = 0; i < 3; ++i) testing::writeFrame(*store, session, i);
     store->writeKdNodes({{0, 0, 1, 2, 3, 0.5}}, {}, true);
     EXPECT_EQ(store->loadKdNodes().size(), 1u);
+    LocationWordDescriptors words;
+    words.location_id = 2;
+    words.dim = 8;
+    words.word_ids = {5};
+    words.created_frames = {2};
+    words.descriptors.assign(8, 5.f);
+    store->putLocationWordDescriptors(words);
   }
   EXPECT_TRUE(checkMap(uri).ok());
   // A flipped byte inside a descriptor: the server's own checks cannot see it.
@@ -180,16 +187,23 @@ TEST(PgMapStore, DamagedRowsAreRefusedOnReadAndListedByCheck) {
           "UPDATE words SET descriptor = set_byte(descriptor, 0, get_byte(descriptor, 0) # 1) "
           "WHERE id = 5");
   pgAdmin(uri, "DELETE FROM kd_nodes");
+  pgAdmin(uri,
+          "UPDATE location_word_descriptors SET words = set_byte(words, 20, get_byte(words, 20) # "
+          "1) WHERE location_id = 2");
   auto store = openMapStore(uri, OpenMode::kReadOnly);
   std::string message;
   EXPECT_EQ(codeOf([&] { store->loadWords({5}); }, &message), ErrorCode::kMapRefused);
   EXPECT_NE(message.find("words row 5"), std::string::npos) << message;
   EXPECT_EQ(codeOf([&] { store->loadKdNodes(); }), ErrorCode::kMapRefused);
+  EXPECT_EQ(codeOf([&] { store->locationWordDescriptors({2}); }, &message), ErrorCode::kMapRefused);
+  EXPECT_NE(message.find("location_word_descriptors row 2"), std::string::npos) << message;
   const CheckReport report = checkMap(uri);
-  ASSERT_EQ(report.findings_total, 2);
+  ASSERT_EQ(report.findings_total, 3);
   EXPECT_EQ(report.findings[0].table, "words");
   EXPECT_EQ(report.findings[0].row, "5");
-  EXPECT_EQ(report.findings[1].table, "kd_nodes");
+  EXPECT_EQ(report.findings[1].table, "location_word_descriptors");
+  EXPECT_EQ(report.findings[1].row, "2");
+  EXPECT_EQ(report.findings[2].table, "kd_nodes");
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 // Checksums beside BLOBs and resume state (schema 8): damage SQLite's page checks cannot see is
 // refused when the row is read, naming the map, the table and the row.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <functional>
@@ -26,6 +27,18 @@ std::string makeMap(const std::filesystem::path& dir) {
   store.putPlaceCode(1, {1, -2, 3, -4});
   store.putState("test.bytes", std::vector<std::uint8_t>{9, 8, 7});
   store.writeKdNodes({{0, 0, 1, 2, 3, 0.25}, {0, 1, 3, 4, 5, 0.5}}, {}, false);
+  LocationWordDescriptors words;
+  words.location_id = 2;
+  words.dim = 8;
+  words.word_ids = {5, 6};
+  words.created_frames = {2, 2};
+  words.descriptors.assign(16, 5.f);
+  std::fill(words.descriptors.begin() + 8, words.descriptors.end(), 6.f);
+  store.putLocationWordDescriptors(words);
+  words.location_id = 3;
+  words.word_ids = {9, 10};
+  words.created_frames = {3, 3};
+  store.putLocationWordDescriptors(words);
   return path;
 }
 
@@ -84,6 +97,13 @@ TEST(RowChecksums, StoredSumsAreTheDocumentedCrc32c) {
     store.insertWords({WordRecord::fromFloats(1000, std::nullopt, descriptor.data(), 8)});
     store.putState("k.odd", value);
     store.putPlaceCode(1, code);
+    LocationWordDescriptors words;
+    words.location_id = 1;
+    words.dim = 8;
+    words.word_ids = {1000};
+    words.created_frames = {-1};
+    words.descriptors = descriptor;
+    store.putLocationWordDescriptors(words);
   }
   BitwiseCrc32c word;
   word.integer(1000);
@@ -98,7 +118,15 @@ TEST(RowChecksums, StoredSumsAreTheDocumentedCrc32c) {
   BitwiseCrc32c place;
   place.integer(1);
   place.bytes(code.data(), code.size());
+  BitwiseCrc32c location_words;
+  location_words.integer(1);
+  location_words.integer(8);
+  location_words.integer(1000);
+  location_words.integer(-1);
+  location_words.bytes(descriptor.data(), descriptor.size() * sizeof(float));
   RawDb db(path);
+  EXPECT_EQ(db.rows("SELECT checksum FROM location_word_descriptors WHERE location_id = 1"),
+            std::vector<std::string>{std::to_string(location_words.sum())});
   EXPECT_EQ(db.rows("SELECT checksum FROM words WHERE id = 1000"),
             std::vector<std::string>{std::to_string(word.sum())});
   EXPECT_EQ(db.rows("SELECT checksum FROM engine_state WHERE key = 'k.odd'"),
@@ -115,6 +143,7 @@ TEST(RowChecksums, DamageInsideRowsIsRefusedNamingTheRow) {
                       loadFloats(s, {1, 2, 5, 6});
                       s.loadWords({1, 12});
                       s.placeCodes();
+                      s.locationWordDescriptors({2});
                       s.getState("test.bytes");
                       s.loadKdNodes();
                     }),
@@ -145,6 +174,18 @@ TEST(RowChecksums, DamageInsideRowsIsRefusedNamingTheRow) {
        [](MapStore& s) { s.placeCodes(); }, "place_codes row 1"},
       {"UPDATE place_codes SET code = X'01FE03FB' WHERE location_id = 1",
        [](MapStore& s) { s.placeCode(1); }, "place_codes row 1"},
+      // One bit of a float the row copied from word 6; another location's words with their sum.
+      {"UPDATE location_word_descriptors SET words = CAST(substr(words, 1, 40) || X'01' || "
+       "substr(words, 42) AS BLOB) WHERE location_id = 2",
+       [](MapStore& s) { s.locationWordDescriptors({2}); }, "location_word_descriptors row 2"},
+      {"UPDATE location_word_descriptors SET (words, checksum) = (SELECT words, checksum FROM "
+       "location_word_descriptors WHERE location_id = 3) WHERE location_id = 2",
+       [](MapStore& s) {
+         std::vector<float> rows(8);
+         std::int64_t created = 0;
+         s.loadLocationDescriptors({2}, {5}, 8, rows.data(), &created);
+       },
+       "location_word_descriptors row 2"},
       {"UPDATE engine_state SET value = X'090807FF' WHERE key = 'test.bytes'",
        [](MapStore& s) { s.getState("test.bytes"); }, "engine_state row 'test.bytes'"},
       {"UPDATE kd_nodes SET split_value = 0.75 WHERE tree = 0 AND node = 1",

@@ -144,8 +144,11 @@ class MapImpl final : public Map {
   // Moves LTM locations back to WM: signatures, missing words, links, ages.
   void bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write, FrameResult& result);
   // Words of the file that the vocabulary lacks go back into it with their stored descriptors
-  // (repeats allowed).
-  void restoreWords(std::vector<std::int64_t> missing);
+  // (repeats allowed), read from the rows of the `locations` that reference them.
+  void restoreWords(std::vector<std::int64_t> missing, const std::vector<std::int64_t>& locations);
+  // The descriptors of a new location's words, written beside it so that bringing it back from
+  // long-term memory reads one row (table location_word_descriptors).
+  void storeLocationWords(std::int64_t location_id, const Signature& signature, FrameWrite& write);
   void storePlaceCode(std::int64_t location_id, const Features& features, FrameWrite& write);
   const std::vector<std::int8_t>& frameCode(const Features& features);
   void transferToLtm(std::int64_t hypothesis, double frame_seconds, FrameWrite& write,

@@ -36,9 +36,10 @@ struct MapImpl::FrameWrite {
   std::optional<std::pair<std::int64_t, std::int64_t>> weight;  // location, new weight
   std::vector<std::int64_t> to_wm, to_ltm;
   std::optional<storage::HypothesisRecord> hypothesis;
-  std::optional<std::vector<std::int8_t>> place_code;       // the new location's
-  std::vector<std::uint8_t> place_coder;                    // the centres, once per map
-  std::vector<std::pair<std::int64_t, std::int64_t>> ages;  // locations entering STM/WM
+  std::optional<std::vector<std::int8_t>> place_code;              // the new location's
+  std::optional<storage::LocationWordDescriptors> location_words;  // the new location's
+  std::vector<std::uint8_t> place_coder;                           // the centres, once per map
+  std::vector<std::pair<std::int64_t, std::int64_t>> ages;         // locations entering STM/WM
   // The hypothesis whose frames the result names, read in the frame's transaction: once the
   // commit returns, the frame needs nothing more from the map, so a lost connection or a kill
   // after it cannot separate a committed frame from its result.
@@ -218,6 +219,7 @@ void MapImpl::placeInShortTermMemory(const Features& features, const Quantised& 
     }
     if (geometricCheckOn(options_) && features.descriptors.type() == CV_32F)
       w.keypoint_descriptors = encodeDescriptors(kept);
+    storeLocationWords(r.location_id, q.signature, w);
     storePlaceCode(r.location_id, features, w);
     const auto overflow = tiers_->push(r.location_id);
     w.ages.emplace_back(r.location_id, tiers_->ageOf(r.location_id));
@@ -377,14 +379,15 @@ void MapImpl::searchLongTermMemory(const Features& features, FrameWrite& write,
   searched_back_ = std::move(ids);  // loop candidates of this frame (candidate_choice.h)
 }
 
-void MapImpl::restoreWords(std::vector<std::int64_t> missing) {
+void MapImpl::restoreWords(std::vector<std::int64_t> missing,
+                           const std::vector<std::int64_t>& locations) {
   std::sort(missing.begin(), missing.end());
   missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
   if (missing.empty()) return;
   cv::Mat descriptors(static_cast<int>(missing.size()), vocabulary_->dim(), CV_32F);
   std::vector<std::int64_t> created(missing.size());
-  store_->loadFloatDescriptors(missing, vocabulary_->dim(), descriptors.ptr<float>(),
-                               created.data());
+  store_->loadLocationDescriptors(locations, missing, vocabulary_->dim(), descriptors.ptr<float>(),
+                                  created.data());
   const std::int64_t next_word_id = vocabulary_->nextWordId();
   vocabulary_->insert(missing, descriptors, created);
   keepWordIdsInBlock(next_word_id);  // words of other writers may have larger ids
@@ -393,16 +396,13 @@ void MapImpl::restoreWords(std::vector<std::int64_t> missing) {
 void MapImpl::bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write,
                         FrameResult& result) {
   if (ids.empty()) return;
-  auto refs = store_->loadWordRefs(ids);
+  auto signatures = store_->loadWordIds(ids);
   std::vector<std::int64_t> missing;
   for (std::int64_t id : ids) {
-    std::vector<WordId> words;
-    words.reserve(refs[id].size());
-    for (const auto& ref : refs[id]) words.push_back(ref.word_id);
-    for (WordId word : index_.add(id, Signature::fromWords(std::move(words))).referenced)
+    for (WordId word : index_.add(id, Signature::fromWords(std::move(signatures[id]))).referenced)
       if (!vocabulary_->contains(word)) missing.push_back(word);
   }
-  restoreWords(std::move(missing));
+  restoreWords(std::move(missing), ids);
   for (std::int64_t id : ids) {
     graph_.addNode(id);
     for (const auto& l : store_->links(id)) {
@@ -415,6 +415,23 @@ void MapImpl::bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write,
   for (std::int64_t id : ids) write.ages.emplace_back(id, tiers_->ageOf(id));
   write.to_wm.insert(write.to_wm.end(), ids.begin(), ids.end());
   result.retrieved += ids.size();
+}
+
+void MapImpl::storeLocationWords(std::int64_t location_id, const Signature& signature,
+                                 FrameWrite& write) {
+  // Imported words never leave RAM, so no retrieval reads them.
+  storage::LocationWordDescriptors words;
+  words.location_id = location_id;
+  words.dim = vocabulary_->dim();
+  for (const Signature::Entry& e : signature.entries()) {
+    if (std::binary_search(imported_words_.begin(), imported_words_.end(), e.word)) continue;
+    const float* descriptor = vocabulary_->descriptor(e.word);
+    if (!descriptor) continue;  // never so: a new location's words were all just quantised to
+    words.word_ids.push_back(e.word);
+    words.created_frames.push_back(vocabulary_->createdFrame(e.word));
+    words.descriptors.insert(words.descriptors.end(), descriptor, descriptor + words.dim);
+  }
+  if (!words.word_ids.empty()) write.location_words = std::move(words);
 }
 
 void MapImpl::storePlaceCode(std::int64_t location_id, const Features& features,
@@ -485,6 +502,7 @@ void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_pa
     if (w.new_location) {
       store_->insertLocation(*w.new_location);
       if (w.place_code) store_->putPlaceCode(w.new_location->id, *w.place_code);
+      if (w.location_words) store_->putLocationWordDescriptors(*w.location_words);
       store_->insertWordRefs(w.new_location->id, w.refs);
       if (!w.keypoint_descriptors.empty())
         store_->putState(keypointDescriptorsKey(w.new_location->id), w.keypoint_descriptors);

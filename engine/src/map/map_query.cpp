@@ -75,7 +75,9 @@ void MapImpl::loadLtmWords() {
       if (!vocabulary_->contains(word)) missing.push_back(word);
     ltm_words_->add(id, Signature::fromWords(std::move(words[id])));
   }
-  restoreWords(std::move(missing));
+  // Every LTM location's words: walking the words table in id order reads less than every
+  // location's own row would.
+  restoreWords(std::move(missing), {});
 }
 
 void MapImpl::loadPlaceNeighbourhood() {

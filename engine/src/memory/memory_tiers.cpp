@@ -49,15 +49,15 @@ MemoryTiers::MemoryTiers(const MemorySettings& settings) : settings_(settings) {
 }
 
 LocationRecord& MemoryTiers::recordOf(MemoryLocationId id) {
-  auto it = records_.find(id);
-  if (it == records_.end()) invalid("unknown location " + idText(id));
-  return it->second;
+  LocationRecord* r = records_.find(id);
+  if (!r) invalid("unknown location " + idText(id));
+  return *r;
 }
 
 const LocationRecord& MemoryTiers::recordOf(MemoryLocationId id) const {
-  auto it = records_.find(id);
-  if (it == records_.end()) invalid("unknown location " + idText(id));
-  return it->second;
+  const LocationRecord* r = records_.find(id);
+  if (!r) invalid("unknown location " + idText(id));
+  return *r;
 }
 
 void MemoryTiers::enterWm(LocationRecord& r) {
@@ -81,7 +81,7 @@ void MemoryTiers::removeEverywhere(MemoryLocationId id) {
       leaveWm(r);
       break;
     case Tier::kLtm:
-      ltm_.erase(id);
+      --ltm_count_;
       break;
   }
   retrieved_this_frame_.erase(id);
@@ -98,13 +98,13 @@ std::vector<MemoryLocationId> MemoryTiers::push(MemoryLocationId id,
     weight = old.weight + 1;
     removeEverywhere(*absorb);
   }
-  records_[id] = LocationRecord{id, Tier::kStm, weight, next_age_++};
+  records_.insert(id, LocationRecord{id, Tier::kStm, weight, next_age_++});
   stm_.push_back(id);
   std::vector<MemoryLocationId> overflow;
   while (stm_.size() > static_cast<std::size_t>(settings_.stm_size)) {
     const MemoryLocationId oldest = stm_.front();
     stm_.pop_front();
-    enterWm(records_.at(oldest));
+    enterWm(recordOf(oldest));
     overflow.push_back(oldest);
   }
   return overflow;
@@ -186,10 +186,10 @@ void MemoryTiers::transferToLtm(const std::vector<MemoryLocationId>& ids) {
     if (!distinct.insert(id).second) invalid("location " + idText(id) + " transferred twice");
   }
   for (MemoryLocationId id : ids) {
-    LocationRecord& r = records_.at(id);
+    LocationRecord& r = recordOf(id);
     leaveWm(r);
     r.tier = Tier::kLtm;
-    ltm_.insert(id);
+    ++ltm_count_;
     retrieved_this_frame_.erase(id);
   }
 }
@@ -207,7 +207,7 @@ std::vector<MemoryLocationId> MemoryTiers::retrievalCandidates(
   if (best_hypothesis < 0) return chosen;  // no hypothesis, nothing to bring back
   for (MemoryLocationId id : ltm_neighbours) {
     if (chosen.size() >= max_retrieved) break;
-    if (ltm_.count(id) == 0) continue;
+    if (!isIn(id, Tier::kLtm)) continue;
     if (std::find(chosen.begin(), chosen.end(), id) != chosen.end()) continue;
     chosen.push_back(id);
   }
@@ -221,8 +221,8 @@ void MemoryTiers::retrieveToWm(const std::vector<MemoryLocationId>& ids) {
     if (!distinct.insert(id).second) invalid("location " + idText(id) + " retrieved twice");
   }
   for (MemoryLocationId id : ids) {
-    LocationRecord& r = records_.at(id);
-    ltm_.erase(id);
+    LocationRecord& r = recordOf(id);
+    --ltm_count_;
     r.age = next_age_++;  // new to WM: the place the camera just came back to goes last
     enterWm(r);
     retrieved_this_frame_.insert(id);
@@ -232,8 +232,8 @@ void MemoryTiers::retrieveToWm(const std::vector<MemoryLocationId>& ids) {
 void MemoryTiers::addToLtm(MemoryLocationId id, std::int64_t weight) {
   if (contains(id)) invalid("location " + idText(id) + " added twice");
   if (weight < 0) invalid("negative weight for location " + idText(id));
-  records_[id] = LocationRecord{id, Tier::kLtm, weight, next_age_++};
-  ltm_.insert(id);
+  records_.insert(id, LocationRecord{id, Tier::kLtm, weight, next_age_++});
+  ++ltm_count_;
 }
 
 Tier MemoryTiers::tierOf(MemoryLocationId id) const { return recordOf(id).tier; }
@@ -248,7 +248,14 @@ std::vector<MemoryLocationId> MemoryTiers::wm() const {
   return ids;
 }
 
-std::vector<MemoryLocationId> MemoryTiers::ltm() const { return {ltm_.begin(), ltm_.end()}; }
+std::vector<MemoryLocationId> MemoryTiers::ltm() const {
+  std::vector<MemoryLocationId> ids;
+  ids.reserve(ltm_count_);
+  records_.forEach([&](MemoryLocationId id, const LocationRecord& r) {
+    if (r.tier == Tier::kLtm) ids.push_back(id);
+  });
+  return ids;
+}
 
 std::string MemoryTiers::checkInvariants() const {
   std::ostringstream problem;
@@ -262,31 +269,43 @@ std::string MemoryTiers::checkInvariants() const {
   for (const auto& [weight, age, id] : wm_by_priority_) {
     ++seen[id];
     if (wm_by_age_.count({age, id}) == 0) return "WM location " + idText(id) + " lacks its age";
-    auto rec = records_.find(id);
-    if (rec == records_.end() || rec->second.weight != weight || rec->second.age != age) {
+    const LocationRecord* rec = records_.find(id);
+    if (!rec || rec->weight != weight || rec->age != age) {
       return "WM location " + idText(id) + " indexed with a stale weight or age";
     }
   }
-  for (MemoryLocationId id : ltm_) ++seen[id];
+  std::size_t in_ltm = 0;
+  records_.forEach([&](MemoryLocationId id, const LocationRecord& r) {
+    if (r.tier != Tier::kLtm) return;
+    ++seen[id];
+    ++in_ltm;
+  });
+  if (in_ltm != ltm_count_)
+    return "LTM counted " + std::to_string(ltm_count_) + ", not " + std::to_string(in_ltm);
   if (stm_.size() > static_cast<std::size_t>(settings_.stm_size)) return "STM over its size";
   for (const auto& [id, count] : seen) {
     if (count != 1) return "location " + idText(id) + " is in " + std::to_string(count) + " tiers";
-    auto rec = records_.find(id);
-    if (rec == records_.end()) return "location " + idText(id) + " in a tier but unknown";
+    if (!records_.contains(id)) return "location " + idText(id) + " in a tier but unknown";
   }
-  for (const auto& [id, r] : records_) {
-    if (r.id != id) return "record of " + idText(id) + " names " + idText(r.id);
-    if (seen.count(id) == 0) return "location " + idText(id) + " is in no tier";
-    const bool listed = (r.tier == Tier::kStm && stm_ids.count(id)) ||
-                        (r.tier == Tier::kWm && wm_by_age_.count({r.age, id})) ||
-                        (r.tier == Tier::kLtm && ltm_.count(id));
-    if (!listed) return "location " + idText(id) + " is not where its record says";
-    if (r.weight < 0) return "location " + idText(id) + " has a negative weight";
-    if (r.age >= next_age_) return "location " + idText(id) + " is younger than the clock";
-  }
+  std::string wrong;
+  records_.forEach([&](MemoryLocationId id, const LocationRecord& r) {
+    if (!wrong.empty()) return;
+    if (r.id != id)
+      wrong = "record of " + idText(id) + " names " + idText(r.id);
+    else if (seen.count(id) == 0)
+      wrong = "location " + idText(id) + " is in no tier";
+    else if (!((r.tier == Tier::kStm && stm_ids.count(id)) ||
+               (r.tier == Tier::kWm && wm_by_age_.count({r.age, id})) || r.tier == Tier::kLtm))
+      wrong = "location " + idText(id) + " is not where its record says";
+    else if (r.weight < 0)
+      wrong = "location " + idText(id) + " has a negative weight";
+    else if (r.age >= next_age_)
+      wrong = "location " + idText(id) + " is younger than the clock";
+  });
+  if (!wrong.empty()) return wrong;
   for (MemoryLocationId id : retrieved_this_frame_) {
-    auto rec = records_.find(id);
-    if (rec == records_.end() || rec->second.tier != Tier::kWm) {
+    const LocationRecord* rec = records_.find(id);
+    if (!rec || rec->tier != Tier::kWm) {
       return "retrieved location " + idText(id) + " is not in WM";
     }
   }
@@ -295,7 +314,8 @@ std::string MemoryTiers::checkInvariants() const {
 
 MemorySnapshot MemoryTiers::snapshot() const {
   MemorySnapshot s;
-  for (const auto& [id, r] : records_) s.locations.push_back(r);
+  s.locations.reserve(records_.size());
+  records_.forEach([&](MemoryLocationId, const LocationRecord& r) { s.locations.push_back(r); });
   s.stm.assign(stm_.begin(), stm_.end());
   s.next_age = next_age_;
   return s;
@@ -304,14 +324,14 @@ MemorySnapshot MemoryTiers::snapshot() const {
 void MemoryTiers::restore(const MemorySnapshot& snapshot) {
   MemoryTiers rebuilt(settings_);
   for (const LocationRecord& r : snapshot.locations) {
-    if (!rebuilt.records_.emplace(r.id, r).second)
-      invalid("snapshot lists " + idText(r.id) + " twice");
-    if (r.tier == Tier::kWm) rebuilt.enterWm(rebuilt.records_.at(r.id));
-    if (r.tier == Tier::kLtm) rebuilt.ltm_.insert(r.id);
+    if (rebuilt.records_.contains(r.id)) invalid("snapshot lists " + idText(r.id) + " twice");
+    LocationRecord& added = rebuilt.records_.insert(r.id, r);
+    if (r.tier == Tier::kWm) rebuilt.enterWm(added);
+    if (r.tier == Tier::kLtm) ++rebuilt.ltm_count_;
   }
   for (MemoryLocationId id : snapshot.stm) {
-    auto it = rebuilt.records_.find(id);
-    if (it == rebuilt.records_.end() || it->second.tier != Tier::kStm) {
+    const LocationRecord* r = rebuilt.records_.find(id);
+    if (!r || r->tier != Tier::kStm) {
       invalid("snapshot STM lists " + idText(id) + ", which is not an STM record");
     }
     rebuilt.stm_.push_back(id);

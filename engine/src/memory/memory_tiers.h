@@ -27,6 +27,7 @@
 #include <utility>
 #include <vector>
 
+#include "memory/location_table.h"
 #include "placedb/map.h"  // Tier
 #include "placedb/options.h"
 
@@ -116,19 +117,19 @@ class MemoryTiers {
   // Registers a location already in LTM (a previous session's map) without a frame.
   void addToLtm(MemoryLocationId id, std::int64_t weight);
 
-  bool contains(MemoryLocationId id) const { return records_.count(id) != 0; }
+  bool contains(MemoryLocationId id) const { return records_.contains(id); }
   bool isIn(MemoryLocationId id, Tier tier) const {  // known, and in that tier
-    const auto it = records_.find(id);
-    return it != records_.end() && it->second.tier == tier;
+    const LocationRecord* r = records_.find(id);
+    return r && r->tier == tier;
   }
   Tier tierOf(MemoryLocationId id) const;  // kInvalidArgument when unknown
   std::int64_t weightOf(MemoryLocationId id) const;
   std::int64_t ageOf(MemoryLocationId id) const;
   const std::deque<MemoryLocationId>& stm() const { return stm_; }
   std::vector<MemoryLocationId> wm() const;   // sorted by id
-  std::vector<MemoryLocationId> ltm() const;  // sorted by id
+  std::vector<MemoryLocationId> ltm() const;  // sorted by id; a pass over every location
   std::size_t wmSize() const { return wm_by_priority_.size(); }
-  std::size_t ltmSize() const { return ltm_.size(); }
+  std::size_t ltmSize() const { return ltm_count_; }
   const std::set<MemoryLocationId>& retrievedThisFrame() const { return retrieved_this_frame_; }
   std::int64_t nextAge() const { return next_age_; }
   // Newest part of WM as defined above.
@@ -152,11 +153,12 @@ class MemoryTiers {
   void removeEverywhere(MemoryLocationId id);
 
   MemorySettings settings_;
-  std::map<MemoryLocationId, LocationRecord> records_;
+  // Every location of the map: in RAM for good, so kept flat (location_table.h).
+  LocationTable<LocationRecord> records_;
   std::deque<MemoryLocationId> stm_;                               // oldest first
   std::set<Priority> wm_by_priority_;                              // transfer order
   std::set<std::pair<std::int64_t, MemoryLocationId>> wm_by_age_;  // newest part
-  std::set<MemoryLocationId> ltm_;
+  std::size_t ltm_count_ = 0;                                      // records in LTM
   std::set<MemoryLocationId> retrieved_this_frame_;
   std::int64_t next_age_ = 0;
 };

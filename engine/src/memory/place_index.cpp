@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "features/parallel_for.h"
 
@@ -24,20 +25,18 @@ bool better(const PlaceMatch& a, const PlaceMatch& b) {
 
 template <typename Visit>
 void PlaceIndex::eachProduct(const std::vector<std::int8_t>& code, Visit&& visit) const {
-  // Blocks of rows, on every thread at once: a map of 40k locations scans 10 MB of codes per
-  // frame, and the scan grows with the map while nothing else of a frame does.
-  constexpr std::size_t kBlock = 2048;
+  // A chunk of rows a task, on every thread at once: a map of 40k locations scans 10 MB of codes
+  // per frame, and the scan grows with the map while nothing else of a frame does.
   const std::size_t rows = ids_.size();
   const bool encoded = rows_with_min_byte_ == 0 && withinEncodedRange(code.data(), dim_);
   thread_local std::vector<std::int32_t> products;
   products.resize(rows);
   std::int32_t* out = products.data();
-  const int blocks = static_cast<int>((rows + kBlock - 1) / kBlock);
+  const int blocks = static_cast<int>((rows + kChunkRows - 1) / kChunkRows);
   parallelFor(blocks, threads_, [&](int b) {
-    const std::size_t start = std::size_t(b) * kBlock;
-    const std::size_t count = std::min(kBlock, rows - start);
-    (encoded ? encodedCodeDots : codeDots)(code.data(), codes_.data() + start * dim_, count, dim_,
-                                           out + start);
+    const std::size_t start = std::size_t(b) * kChunkRows;
+    const std::size_t count = std::min(kChunkRows, rows - start);
+    (encoded ? encodedCodeDots : codeDots)(code.data(), rowData(start), count, dim_, out + start);
   });
   for (std::size_t row = 0; row < rows; ++row) visit(row, out[row]);
 }
@@ -56,11 +55,18 @@ void PlaceIndex::add(std::int64_t location, const std::vector<std::int8_t>& code
     throw Error(ErrorCode::kInvalidArgument, "place code of location " + std::to_string(location) +
                                                  " has " + std::to_string(code.size()) +
                                                  " values, the index " + std::to_string(dim_));
-  auto [it, added] = row_.emplace(location, ids_.size());
+  const std::uint32_t* known = row_.find(location);
+  const bool added = !known;
+  const std::size_t row = added ? ids_.size() : *known;
+  if (added) {
+    if (ids_.size() >= std::numeric_limits<std::uint32_t>::max())
+      throw Error(ErrorCode::kInvalidArgument, "place codes: more locations than rows");
+    row_.insert(location, static_cast<std::uint32_t>(row));
+  }
   centre_.reset();
   if (sum_.size() != dim_) sum_.assign(dim_, 0);
   if (!added) {
-    const std::int8_t* old = codes_.data() + it->second * dim_;
+    const std::int8_t* old = rowData(row);
     for (std::size_t d = 0; d < dim_; ++d) sum_[d] -= old[d];
     rows_with_min_byte_ -= withinEncodedRange(old, dim_) ? 0 : 1;
   }
@@ -68,20 +74,21 @@ void PlaceIndex::add(std::int64_t location, const std::vector<std::int8_t>& code
   for (std::size_t d = 0; d < dim_; ++d) sum_[d] += code[d];
   if (added) {
     ids_.push_back(location);
-    codes_.insert(codes_.end(), code.begin(), code.end());
+    if (row % kChunkRows == 0) chunks_.emplace_back(new std::int8_t[kChunkRows * dim_]);
+    std::copy(code.begin(), code.end(), rowData(row));
     norms_.push_back(norm(code.data(), dim_));
   } else {
-    std::copy(code.begin(), code.end(), codes_.begin() + std::ptrdiff_t(it->second * dim_));
-    norms_[it->second] = norm(code.data(), dim_);
+    std::copy(code.begin(), code.end(), rowData(row));
+    norms_[row] = norm(code.data(), dim_);
   }
 }
 
 void PlaceIndex::clear() {
   dim_ = 0;
   ids_.clear();
-  codes_.clear();
+  chunks_.clear();
   norms_.clear();
-  row_.clear();
+  row_ = LocationTable<std::uint32_t>();
   sum_.clear();
   rows_with_min_byte_ = 0;
   centre_.reset();
@@ -97,7 +104,7 @@ const PlaceIndex::Centre& PlaceIndex::centre() const {
   c.dot_mean.resize(ids_.size());
   c.centred_norm.resize(ids_.size());
   for (std::size_t row = 0; row < ids_.size(); ++row) {
-    const std::int8_t* x = codes_.data() + row * dim_;
+    const std::int8_t* x = rowData(row);
     double dot = 0;
     for (std::size_t d = 0; d < dim_; ++d) dot += c.mean[d] * x[d];
     c.dot_mean[row] = dot;
@@ -129,12 +136,12 @@ std::vector<double> PlaceIndex::centredSimilarities(const std::vector<std::int8_
 }
 
 double PlaceIndex::similarity(const std::vector<std::int8_t>& code, std::int64_t location) const {
-  auto it = row_.find(location);
-  if (it == row_.end() || code.size() != dim_) return 0.0;
+  const std::uint32_t* row = row_.find(location);
+  if (!row || code.size() != dim_) return 0.0;
   const double n = norm(code.data(), dim_);
-  if (n == 0 || norms_[it->second] == 0) return 0.0;
-  const std::int8_t* stored = codes_.data() + it->second * dim_;
-  return double(codeDot(stored, code.data(), dim_)) / (norms_[it->second] * n);
+  if (n == 0 || norms_[*row] == 0) return 0.0;
+  const std::int8_t* stored = rowData(*row);
+  return double(codeDot(stored, code.data(), dim_)) / (norms_[*row] * n);
 }
 
 std::vector<PlaceMatch> PlaceIndex::search(const std::vector<std::int8_t>& code, std::size_t k,

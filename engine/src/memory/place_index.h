@@ -5,10 +5,12 @@
 // 256 M byte products; see bench/quality/README.md for the measured cost.
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
-#include <unordered_map>
 #include <utility>
 #include <vector>
+
+#include "memory/location_table.h"
 
 namespace placedb {
 
@@ -32,7 +34,7 @@ class PlaceIndex {
   // Adds or replaces a location's code; every code of one index has the same length.
   void add(std::int64_t location, const std::vector<std::int8_t>& code);
   void clear();
-  bool contains(std::int64_t location) const { return row_.count(location) != 0; }
+  bool contains(std::int64_t location) const { return row_.contains(location); }
   std::size_t size() const { return ids_.size(); }
 
   // The k locations most similar to `code` among those `admit` accepts, most similar first
@@ -52,19 +54,29 @@ class PlaceIndex {
   std::int64_t idAt(std::size_t row) const { return ids_[row]; }
   // The row of a location's code, or size() when it has none.
   std::size_t rowOf(std::int64_t location) const {
-    auto it = row_.find(location);
-    return it == row_.end() ? ids_.size() : it->second;
+    const std::uint32_t* row = row_.find(location);
+    return row ? *row : ids_.size();
   }
 
  private:
   std::size_t dim_ = 0;
   std::vector<std::int64_t> ids_;
-  std::vector<std::int8_t> codes_;  // ids_.size() x dim_
+  // The codes, kChunkRows rows a chunk: a growing map never copies them all to a larger block
+  // (10 MB at 42k locations, within one frame), nor keeps up to as much again of room unused.
+  static constexpr std::size_t kChunkRows = 2048;
+  std::vector<std::unique_ptr<std::int8_t[]>> chunks_;
   std::vector<double> norms_;
-  std::unordered_map<std::int64_t, std::size_t> row_;
+  LocationTable<std::uint32_t> row_;    // every location's row: flat (location_table.h)
   std::vector<std::int64_t> sum_;       // of every code, dim_ values: exact whatever the order
   std::size_t rows_with_min_byte_ = 0;  // rows not withinEncodedRange (no encoder makes one)
   int threads_ = 1;
+
+  const std::int8_t* rowData(std::size_t row) const {
+    return chunks_[row / kChunkRows].get() + (row % kChunkRows) * dim_;
+  }
+  std::int8_t* rowData(std::size_t row) {
+    return chunks_[row / kChunkRows].get() + (row % kChunkRows) * dim_;
+  }
 
   // The byte product of `code` with every row, handed to visit(row, product) in row order.
   template <typename Visit>

@@ -229,6 +229,18 @@ class MapStore {
   // created[i]. A word that is missing, or of another type or dimension, is kMapRefused.
   virtual void loadFloatDescriptors(const std::vector<std::int64_t>& word_ids, int dim, float* rows,
                                     std::int64_t* created) const = 0;
+  // The descriptors of a location's words, stored beside it (schema 13): written with the
+  // location, read back for the locations that have a row, in the order asked (checksums and
+  // values verified, as words rows are).
+  virtual void putLocationWordDescriptors(const LocationWordDescriptors& words) = 0;
+  virtual std::vector<LocationWordDescriptors> locationWordDescriptors(
+      const std::vector<std::int64_t>& location_ids) const = 0;
+  // loadFloatDescriptors() of words in the signatures of `location_ids` (bringing them back from
+  // long-term memory): from the locations' own rows where those hold them, one read a location,
+  // the rest from the words table.
+  void loadLocationDescriptors(const std::vector<std::int64_t>& location_ids,
+                               const std::vector<std::int64_t>& word_ids, int dim, float* rows,
+                               std::int64_t* created) const;
   virtual std::int64_t wordCount() const = 0;
   virtual std::optional<std::int64_t> maxWordId() const = 0;
   // Words of imported vocabularies, ascending: they stay in the index whatever the tiers do.

@@ -84,6 +84,24 @@ struct WordRecord {
   std::vector<float> floats() const;
 };
 
+// The descriptors of a location's words, stored beside it (schema 13, table
+// location_word_descriptors) so that bringing it back from long-term memory is one read: copies
+// of words rows. Row i of `descriptors` (dim floats) is word_ids[i]'s.
+struct LocationWordDescriptors {
+  std::int64_t location_id = 0;
+  int dim = 0;
+  std::vector<std::int64_t> word_ids;        // ascending, distinct
+  std::vector<std::int64_t> created_frames;  // per word: its created_frame, -1 for none
+  std::vector<float> descriptors;            // word_ids.size() x dim
+
+  // The table's `words` bytes: every id, every created frame (int64), every value (float32),
+  // little-endian.
+  std::vector<std::uint8_t> encode() const;
+  // From a row's bytes; false, leaving the record unchanged, when their size is not a whole
+  // number of words of `dim` values, or the ids do not ascend.
+  bool decode(std::int64_t location, int dimension, const std::uint8_t* data, std::size_t size);
+};
+
 struct WordRef {  // one keypoint of a location's signature quantised to a word
   std::int64_t word_id = 0;
   float x = 0, y = 0, size = 0, angle = 0, response = 0;
