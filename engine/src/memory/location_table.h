@@ -46,12 +46,15 @@ class LocationTable {
   void forEach(Visit&& visit) const {
     for (const auto& [page_index, page] : pages_)
       for (std::size_t i = 0; i < kPageSize; ++i)
-        if (page->present[i]) visit((page_index << kPageShift) + std::int64_t(i), page->values[i]);
+        if (page->present[i])
+          visit(page_index * std::int64_t(kPageSize) + std::int64_t(i), page->values[i]);
   }
 
  private:
   static constexpr int kPageShift = 10;
   static constexpr std::size_t kPageSize = std::size_t{1} << kPageShift;
+  // Any int64 id is taken, negative ones too: the page index is id >> kPageShift, a shift that
+  // floors, and ids are rebuilt by multiplying, since shifting a negative value left is undefined.
   static std::size_t offsetOf(std::int64_t id) { return std::size_t(id) & (kPageSize - 1); }
 
   struct Page {

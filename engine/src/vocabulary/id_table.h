@@ -50,8 +50,7 @@ class IdTable {
     std::vector<std::int64_t> out;
     out.reserve(size_);
     for (const auto& [page_index, page] : pages_)
-      page.forEach(
-          [&](std::uint16_t offset) { out.push_back((page_index << kPageShift) + offset); });
+      page.forEach([&](std::uint16_t offset) { out.push_back(page_index * kPageSize + offset); });
     return out;
   }
 
