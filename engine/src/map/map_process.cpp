@@ -425,8 +425,10 @@ void MapImpl::storeLocationWords(std::int64_t location_id, const Signature& sign
   words.dim = vocabulary_->dim();
   for (const Signature::Entry& e : signature.entries()) {
     if (std::binary_search(imported_words_.begin(), imported_words_.end(), e.word)) continue;
+    // Every word of a new location was just quantised to, so it is in RAM; the test only keeps
+    // a missing word from being read.
     const float* descriptor = vocabulary_->descriptor(e.word);
-    if (!descriptor) continue;  // never so: a new location's words were all just quantised to
+    if (!descriptor) continue;
     words.word_ids.push_back(e.word);
     words.created_frames.push_back(vocabulary_->createdFrame(e.word));
     words.descriptors.insert(words.descriptors.end(), descriptor, descriptor + words.dim);
