@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "pg_test_server.h"
+#include "backend_fixture.h"
 #include "placedb/storage/migrations.h"
 #include "placedb/storage/sqlite_map_store.h"
 #include "storage_test_util.h"
@@ -35,20 +35,11 @@ bool sameWords(const LocationWordDescriptors& a, const LocationWordDescriptors& 
          a.created_frames == b.created_frames && a.descriptors == b.descriptors;
 }
 
-// The parameter names the backend: "sqlite" (a file) or "postgresql" (a fresh database).
-class LocationWords : public ::testing::TestWithParam<std::string> {
+class LocationWords : public testing::BackendTest {
  protected:
   void SetUp() override {
-    if (GetParam() == "postgresql") {
-      PLACEDB_REQUIRE_PG_SERVER(server);
-      path_ = placedb::testing::freshPgDatabase(server, placedb::testing::pgTestDatabaseName());
-    } else {
-      dir_ = placedb::testing::scratchDir(
-          std::string("LocationWords_") +
-          ::testing::UnitTest::GetInstance()->current_test_info()->name());
-      path_ = (dir_ / "map.db").string();
-    }
-    store_ = openMapStore(path_, OpenMode::kReadWrite);
+    BackendTest::SetUp();
+    if (IsSkipped()) return;
     const std::int64_t session = store_->beginSession("test", {}, "test");
     // Words 1..40 in the words table; locations 1 and 2 hold some of them, 1 with its row.
     Transaction tx = store_->begin();
@@ -68,10 +59,6 @@ class LocationWords : public ::testing::TestWithParam<std::string> {
     store_->insertLocation({2, session, 0, Tier::kLtm, 1});
     tx.commit();
   }
-
-  std::filesystem::path dir_;
-  std::string path_;
-  std::unique_ptr<MapStore> store_;
 };
 
 TEST_P(LocationWords, RowsAreReadBackAsWrittenInTheOrderAsked) {

@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "pg_test_server.h"
+#include "backend_fixture.h"
 #include "placedb/storage/sqlite_map_store.h"
 #include "storage_test_util.h"
 #include "test_paths.h"
@@ -17,20 +17,11 @@
 namespace placedb::storage {
 namespace {
 
-// The parameter names the backend: "sqlite" (a file) or "postgresql" (a fresh database).
-class Records : public ::testing::TestWithParam<std::string> {
+class Records : public testing::BackendTest {
  protected:
   void SetUp() override {
-    if (GetParam() == "postgresql") {
-      PLACEDB_REQUIRE_PG_SERVER(server);
-      path_ = placedb::testing::freshPgDatabase(server, placedb::testing::pgTestDatabaseName());
-    } else {
-      dir_ = placedb::testing::scratchDir(
-          std::string("Records_") +
-          ::testing::UnitTest::GetInstance()->current_test_info()->name());
-      path_ = (dir_ / "map.db").string();
-    }
-    store_ = openMapStore(path_, OpenMode::kReadWrite);
+    BackendTest::SetUp();
+    if (IsSkipped()) return;
     session_ = store_->beginSession("/data/lip6", {{"T_loop", "0.11"}, {"wm_max", "300"}}, "0.1.0");
   }
 
@@ -45,9 +36,6 @@ class Records : public ::testing::TestWithParam<std::string> {
     return f;
   }
 
-  std::filesystem::path dir_;
-  std::string path_;
-  std::unique_ptr<MapStore> store_;
   std::int64_t session_ = 0;
 };
 
