@@ -73,5 +73,7 @@ else()
 endif()
 
 add_executable(placedb ${CMAKE_CURRENT_LIST_DIR}/src/main.cpp)
-target_link_libraries(placedb PRIVATE placedb_cli placedb_build_flags placedb_version)
+# main() checks PLACEDB_SIMD (an engine internal) before any command writes a file.
+target_link_libraries(placedb PRIVATE placedb_cli placedb_engine_internal placedb_build_flags
+                      placedb_version)
 set_target_properties(placedb PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/tools)

@@ -4,6 +4,7 @@
 // was; a resumed session takes its stored settings.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -317,6 +318,26 @@ TEST(CliRefusals, StopAfterZeroIsAShortUsageError) {
   EXPECT_EQ(r.exit_code, 2) << describe(r);
   EXPECT_LT(r.err.size(), 200u) << r.err;
   EXPECT_FALSE(fs::exists(dir / "m.placedb"));
+}
+
+// PLACEDB_SIMD (engine/src/features/cpu_support.h) is checked before anything is written: a
+// value it does not know leaves no map and no demo folder behind.
+TEST(CliRefusals, AnUnknownSimdLevelIsAUsageErrorThatWritesNothing) {
+  auto seq = smallSequence(3);
+  auto dir = scratchDir("CliRefusals_simd");
+  const char* before = std::getenv("PLACEDB_SIMD");
+  const std::string kept = before ? before : "";
+  ::setenv("PLACEDB_SIMD", "sse4", 1);
+  auto map = placedb({"map", (dir / "m.placedb").string(), (seq / "frames.txt").string()}, dir);
+  auto demo = placedb({"demo", "--out", (dir / "demo").string()}, dir);
+  if (before)
+    ::setenv("PLACEDB_SIMD", kept.c_str(), 1);
+  else
+    ::unsetenv("PLACEDB_SIMD");
+  expectCleanError(map, 2, "PLACEDB_SIMD is \"sse4\"");
+  expectCleanError(demo, 2, "PLACEDB_SIMD");
+  EXPECT_FALSE(fs::exists(dir / "m.placedb"));
+  EXPECT_FALSE(fs::exists(dir / "demo"));
 }
 
 }  // namespace

@@ -22,8 +22,9 @@ const std::map<std::string, std::set<std::string>>& allowedRooms() {
       {"features", {}},
       {"vocabulary", {"features"}},
       {"filter", {}},
-      {"memory", {"features"}},  // its scan shares rows out by features/parallel_for.h
-      {"geometry", {}},
+      // features/ is the floor: parallel_for.h and cpu_support.h (which SIMD loops may run).
+      {"memory", {"features"}},
+      {"geometry", {"features"}},
       {"decision", {"filter", "geometry"}},
       {"map", {"features", "vocabulary", "filter", "memory", "geometry", "decision", "api"}},
   };

@@ -10,6 +10,7 @@
 
 #include "commands.h"
 #include "exit_codes.h"
+#include "features/cpu_support.h"
 #include "placedb/error.h"
 #include "placedb/version.h"
 
@@ -77,6 +78,7 @@ int main(int argc, char** argv) {
   // disk, instead of killing the process in the middle of a file.
   std::signal(SIGXFSZ, SIG_IGN);
   try {
+    placedb::simdLevel();  // an invalid PLACEDB_SIMD is refused before any file is written
     return run(argc, argv);
   } catch (const placedb::Error& e) {
     printError(e.what());

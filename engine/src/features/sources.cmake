@@ -1,5 +1,6 @@
 # Feature extraction: our SURF-64 and OpenCV's SIFT/KAZE/ORB behind one interface.
 target_sources(placedb_engine PRIVATE
+  ${CMAKE_CURRENT_LIST_DIR}/cpu_support.cpp
   ${CMAKE_CURRENT_LIST_DIR}/feature_extractor.cpp
   ${CMAKE_CURRENT_LIST_DIR}/feature_options.cpp
   ${CMAKE_CURRENT_LIST_DIR}/image_conversion.cpp

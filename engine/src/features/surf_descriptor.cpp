@@ -10,6 +10,7 @@
 #include <immintrin.h>
 #endif
 
+#include "features/cpu_support.h"
 #include "features/parallel_for.h"
 
 namespace placedb {
@@ -279,7 +280,7 @@ __attribute__((target("avx2"))) int orientationPositionsAvx2(const float* rx, co
 void orientationPositions(const float* rx, const float* ry, int count, double* positions) {
   int i = 0;
 #if defined(PLACEDB_ORIENTATION_AVX2)
-  static const bool avx2 = __builtin_cpu_supports("avx2");
+  static const bool avx2 = simdAllows(SimdLevel::kAvx2);
   if (avx2) i = orientationPositionsAvx2(rx, ry, count, positions);
 #endif
 #if defined(__SSE2__)
@@ -322,7 +323,7 @@ int orientationBin(double position, float rx, float ry) {
 void surfHaarResponses(const IntegralImage& integral, const int* a, const int* b, int count,
                        int half, float* rx, float* ry) {
 #if defined(PLACEDB_HAAR_AVX2)
-  static const bool avx2 = __builtin_cpu_supports("avx2");
+  static const bool avx2 = simdAllows(SimdLevel::kAvx2);
   if (avx2) {
     haarResponsesAvx2(integral, a, b, count, half, rx, ry);
     return;
@@ -406,7 +407,7 @@ void surfDescriptor(const IntegralImage& integral, const cv::KeyPoint& keypoint,
   // The turned window's samples, in image pixels.
   std::array<int, kDescriptorSampleCount> a, b;
 #if defined(PLACEDB_DESCRIPTOR_CENTRES_AVX2)
-  static const bool avx2 = __builtin_cpu_supports("avx2");
+  static const bool avx2 = simdAllows(SimdLevel::kAvx2);
   if (avx2) {
     descriptorCentresAvx2(samples, keypoint.pt.x, keypoint.pt.y, s, cos_t, sin_t, a.data(),
                           b.data());

@@ -10,6 +10,7 @@
 #include <immintrin.h>
 #endif
 
+#include "features/cpu_support.h"
 #include "features/parallel_for.h"
 
 namespace placedb {
@@ -206,7 +207,7 @@ void computeLayerRows(const SteppedTable& table, ResponseLayer& layer, int row_b
   const int r0 = std::max(row_begin, layer.first_row);
   const int r1 = std::min(row_end - 1, layer.last_row);
 #if defined(PLACEDB_LAYER_ROWS_AVX2)
-  static const bool avx2 = __builtin_cpu_supports("avx2");
+  static const bool avx2 = simdAllows(SimdLevel::kAvx2);
 #endif
   const int count = layer.last_col - layer.first_col + 1;
   const int x0 = layer.first_col * layer.step;  // the first centre; its filter fits

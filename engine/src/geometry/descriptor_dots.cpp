@@ -5,6 +5,8 @@
 #include <immintrin.h>
 #endif
 
+#include "features/cpu_support.h"
+
 namespace placedb {
 namespace {
 
@@ -139,13 +141,11 @@ bool dotKernelAvailable(DotKernel kernel) {
   switch (kernel) {
 #if defined(PLACEDB_CODE_DOTS_X86)
     case DotKernel::kVnni: {
-      static const bool vnni = __builtin_cpu_supports("avx512f") &&
-                               __builtin_cpu_supports("avx512bw") &&
-                               __builtin_cpu_supports("avx512vnni");
+      static const bool vnni = simdAllows(SimdLevel::kAvx512Vnni);
       return vnni;
     }
     case DotKernel::kAvx2: {
-      static const bool avx2 = __builtin_cpu_supports("avx2");
+      static const bool avx2 = simdAllows(SimdLevel::kAvx2);
       return avx2;
     }
 #endif

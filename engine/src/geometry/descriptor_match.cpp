@@ -7,6 +7,7 @@
 #include <opencv2/core/hal/hal.hpp>
 #include <utility>
 
+#include "features/cpu_support.h"
 #include "geometry/descriptor_dots.h"
 #if defined(__GNUC__) && defined(__x86_64__)
 #include <immintrin.h>
@@ -319,7 +320,7 @@ std::vector<RatioMatch> ratioMatches(const DescriptorSide& query, const Descript
     // Squared distances between the codes' vectors, and the two smallest.
     const double q_norm_sq = qc->norm[qi] * qc->norm[qi], q_unit2 = 2.0 * qc->unit[qi];
 #if defined(PLACEDB_CODE_DISTANCES_AVX2)
-    static const bool avx2 = __builtin_cpu_supports("avx2");
+    static const bool avx2 = simdAllows(SimdLevel::kAvx2);
     const auto [a1, a2] = avx2 ? codeDistancesAvx2(q_norm_sq, q_unit2, c_norm_sq.data(),
                                                    cc->unit.data(), product, nc, approx.data())
                                : codeDistances(q_norm_sq, q_unit2, c_norm_sq.data(),

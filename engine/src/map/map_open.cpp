@@ -6,6 +6,7 @@
 #include <cstring>
 #include <set>
 
+#include "features/cpu_support.h"
 #include "features/feature_options.h"
 #include "map/map_impl.h"
 #include "map/option_mapping.h"
@@ -22,6 +23,7 @@ void checkComponentSettings(const Options& options) {
                                extractor->signature());
   BayesFilter filter(toFilterSettings(options));
   MemoryTiers tiers(toMemorySettings(options));
+  simdLevel();  // PLACEDB_SIMD is a setting too (features/cpu_support.h)
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #define PLACEDB_CODE_DOTS_AVX2 1
 #endif
 
+#include "features/cpu_support.h"
 #include "placedb/error.h"
 
 namespace placedb {
@@ -298,7 +299,7 @@ bool withinEncodedRange(const std::int8_t* code, std::size_t code_dim) {
 void encodedCodeDots(const std::int8_t* query, const std::int8_t* codes, std::size_t rows,
                      std::size_t code_dim, std::int32_t* out) {
 #if defined(PLACEDB_CODE_DOTS_AVX2)
-  static const bool avx2 = __builtin_cpu_supports("avx2");
+  static const bool avx2 = simdAllows(SimdLevel::kAvx2);
   if (avx2 && code_dim % 32 == 0) {
     encodedCodeDotsAvx2(query, codes, rows, code_dim, out);
     return;
@@ -310,7 +311,7 @@ void encodedCodeDots(const std::int8_t* query, const std::int8_t* codes, std::si
 void codeDots(const std::int8_t* query, const std::int8_t* codes, std::size_t rows,
               std::size_t code_dim, std::int32_t* out) {
 #if defined(PLACEDB_CODE_DOTS_AVX2)
-  static const bool avx2 = __builtin_cpu_supports("avx2");
+  static const bool avx2 = simdAllows(SimdLevel::kAvx2);
   if (avx2 && code_dim % 16 == 0) {
     codeDotsAvx2(query, codes, rows, code_dim, out);
     return;
