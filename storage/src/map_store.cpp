@@ -30,7 +30,10 @@ void MapStore::loadLocationDescriptors(const std::vector<std::int64_t>& location
     throw StorageError(ErrorCode::kInvalidArgument, "loadLocationDescriptors: ids must be sorted");
   const std::size_t row_floats = static_cast<std::size_t>(dim);
   std::vector<char> found(word_ids.size(), 0);
-  for (const LocationWordDescriptors& stored : locationWordDescriptors(location_ids)) {
+  // No locations, no rows to read (a server would still be asked once).
+  const auto stored_rows = location_ids.empty() ? std::vector<LocationWordDescriptors>()
+                                                : locationWordDescriptors(location_ids);
+  for (const LocationWordDescriptors& stored : stored_rows) {
     if (stored.dim != dim)
       throw StorageError(ErrorCode::kMapRefused,
                          "map " + path() + ": the word descriptors of location " +
