@@ -14,10 +14,11 @@ Build first: cmake --build build -j2 --target placedb_quality_run placedb_resize
 """
 import argparse
 import csv
-import json
 import os
 import subprocess
 import sys
+
+from run import score as score_log  # score_loops.py --json on one log
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -98,15 +99,13 @@ def false_closures(log, gt_path):
     return out
 
 
-def score(build, name, frames, gt, settings, work, tag):
+def map_and_score(build, name, frames, gt, settings, work, tag):
     log = os.path.join(work, f'{name}.{tag}.csv')
     cmd = [os.path.join(build, 'bench', 'quality', 'placedb_quality_run'), frames, '--log', log]
     for s in settings:
         cmd += ['--set', s]
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
-    scorer = os.path.join(SHARED, 'tools', 'score_loops.py')
-    s = json.loads(subprocess.run([sys.executable, scorer, log, gt, '--window', '10', '--json'],
-                                  check=True, capture_output=True, text=True).stdout)
+    s = score_log(os.path.join(SHARED, 'tools', 'score_loops.py'), log, gt, 10)
     return s, false_closures(log, gt)
 
 
@@ -128,7 +127,7 @@ def main():
         frames, gt = make_copy(name, a.work, resizer)
         cells, misses = [], []
         for tag, build in builds:
-            s, false = score(build, name, frames, gt, a.set, a.work, tag)
+            s, false = map_and_score(build, name, frames, gt, a.set, a.work, tag)
             cells.append(f"{tag} {s['recall_at_100_precision']:.2f} "
                          f"({s['accepted_true']}/{s['accepted_false']})")
             misses += [f'{tag}: frame {q} named {" ".join(map(str, named))}, '
