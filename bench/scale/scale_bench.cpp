@@ -4,17 +4,14 @@
 // resume on a growing long-term memory), the localisation query time, and the loop closures
 // accepted against the exact ground truth.
 //
-//   placedb_scale_bench [--frames N] [--wm-max M] [--window W] [--map PATH] [--seed S]
-//                       [--width W] [--height H] [--queries Q] [--set key=value]...
-//                       [--closures CSV]
-//   placedb_scale_bench --frames N [--seed S] [--width W] [--height H] --show Q R PNG
-//   placedb_scale_bench --frames N [--width W] [--height H] [--queries Q] [--mapped M]
-//                       --query-only MAP
+// Usage: kUsage below (--help prints it).
 //
 // --closures writes one row per accepted closure with how the query's view relates to the
 // hypothesis frame that best matches it (footprint IoU, shared ground, heading, gap), so a
-// closure the ground truth calls false can be checked frame by frame; --show writes frames Q and
-// R of the same sequence side by side, then R warped into Q's view, to look at one.
+// closure the ground truth calls false can be checked frame by frame; --frame-times writes every
+// frame's stage times and tier moves, so the frames behind a window's p99 can be told apart from
+// the rest; --show writes frames Q and R of the same sequence side by side, then R warped into
+// Q's view, to look at one.
 //
 // Rows are printed as each window ends, so a run stopped early still leaves its figures.
 #include <fmt/format.h>
@@ -58,7 +55,9 @@ struct Flags {
   int width = 320, height = 240;
   std::uint64_t seed = 1;
   fs::path map = fs::temp_directory_path() / "placedb-scale-bench.placedb";
-  fs::path closures;  // CSV of accepted closures, when set
+  fs::path closures;     // CSV of accepted closures, when set
+  fs::path frame_times;  // CSV of every frame's stage times, when set
+  bool help = false;
   int show_q = -1, show_r = -1;
   fs::path show_png;
   std::map<std::string, std::string> settings;
@@ -131,10 +130,32 @@ std::uintmax_t mapBytes(const fs::path& map) {
 
 void removeMap(const fs::path& map) { placedb::storage::removeMap(map.string()); }
 
+constexpr const char* kUsage = R"(usage:
+  placedb_scale_bench [--frames N] [--wm-max M] [--window W] [--map PATH] [--seed S]
+                      [--width W] [--height H] [--queries Q] [--set key=value]...
+                      [--closures CSV] [--frame-times CSV]
+  placedb_scale_bench --reopen-only MAP [--wm-max M]
+  placedb_scale_bench --frames N [--seed S] [--width W] [--height H] --show Q R PNG
+  placedb_scale_bench --frames N [--width W] [--height H] [--queries Q] [--mapped M]
+                      --query-only MAP
+
+Maps N synthetic frames (default 100000 at 320x240, wm_max 1500, windows of 5000) and prints
+one row per window: frame time p50/p99/max, tiers, RSS, file bytes per location, reopen and
+query times, loop closures against the exact ground truth, and per-stage means.
+  --closures CSV     one row per accepted closure, with how its two views relate
+  --frame-times CSV  one row per frame: its time, stage times and tier moves
+  --set key=value    any engine setting (as placedb's --set); wm_max comes from --wm-max
+See bench/scale/README.md for the columns and the runs measured so far.
+)";
+
 Flags parseFlags(int argc, char** argv) {
   Flags f;
   for (int i = 1; i < argc; ++i) {
     std::string flag = argv[i];
+    if (flag == "--help" || flag == "-h") {
+      f.help = true;
+      return f;
+    }
     if (flag == "--reopen-only" || flag == "--query-only") {
       if (i + 1 >= argc) throw std::invalid_argument(flag + " needs a map");
       f.map = argv[++i];
@@ -171,10 +192,12 @@ Flags parseFlags(int argc, char** argv) {
       f.map = value;
     else if (flag == "--closures")
       f.closures = value;
+    else if (flag == "--frame-times")
+      f.frame_times = value;
     else if (flag == "--set")
       f.settings[value.substr(0, value.find('='))] = value.substr(value.find('=') + 1);
     else
-      throw std::invalid_argument("unknown flag " + flag);
+      throw std::invalid_argument("unknown flag " + flag + " (--help lists them)");
   }
   if (f.frames < 1 || f.window < 1)
     throw std::invalid_argument("--frames and --window must be >= 1");
@@ -292,6 +315,10 @@ QueryFigures measureQueries(const Flags& flags, const placedb::Options& options,
 int main(int argc, char** argv) {
   try {
     Flags flags = parseFlags(argc, argv);
+    if (flags.help) {
+      fmt::print("{}", kUsage);
+      return 0;
+    }
     auto settings = flags.settings;
     settings["wm_max"] = std::to_string(flags.wm_max);
     placedb::Options options = placedb::Options::fromSettings(settings);
@@ -346,6 +373,14 @@ int main(int argc, char** argv) {
                  "q,location,n_frames,frames,r,gap,iou,shared,heading_deg,listed,same,inliers,"
                  "matches,log10_nfa,posterior\n");
     }
+    std::FILE* frame_times = nullptr;
+    if (!flags.frame_times.empty()) {
+      frame_times = std::fopen(flags.frame_times.c_str(), "w");
+      if (!frame_times) throw std::runtime_error("cannot write " + flags.frame_times.string());
+      fmt::print(frame_times,
+                 "frame,ms,features,quantisation,likelihood,filter,verification,memory,storage,"
+                 "retrieved,retrieved_by_search,transferred,accepted\n");
+    }
     fmt::print(
         "scale profile: {} frames {}x{}, seed {}, {} revisiting frames (first at {}), "
         "planned in {:.1f} s\n",
@@ -376,6 +411,14 @@ int main(int argc, char** argv) {
       placedb::FrameResult r = map->process(image, i, "frame " + std::to_string(i));
       window_times.push_back(msBetween(start, Clock::now()));
       stages.add(r);
+      if (frame_times) {
+        const placedb::StageTimes& t = r.times;
+        fmt::print(frame_times,
+                   "{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{},{},{},{}\n", i,
+                   window_times.back(), t.features, t.quantisation, t.likelihood, t.filter,
+                   t.verification, t.memory, t.storage, r.retrieved, r.retrieved_by_search,
+                   r.transferred, int(r.hypothesis.accepted));
+      }
       locations = std::max(locations, r.location_id);
       if (r.hypothesis.accepted) {
         ++accepted;
@@ -420,6 +463,7 @@ int main(int argc, char** argv) {
     }
     map->close();
     if (closures) std::fclose(closures);
+    if (frame_times) std::fclose(frame_times);
     fmt::print(
         "done: {} frames, {} locations, map {:.1f} MiB; accepted loop closures {} "
         "({} true, precision {:.3f}; {} in the revisit list, {:.3f})\n",
