@@ -52,6 +52,8 @@ struct Flags {
   bool reopen_only = false;  // time Map::open + resumeSession on an existing map, then stop
   bool query_only = false;   // query an existing map made with the same --frames, then stop
   int mapped = 0;            // --query-only: frames the map holds (0: --frames)
+  int remap_from = -1;       // --remap: the first frame to map again (-1: no --remap)
+  int remap_count = 0;       // --remap: how many
   int width = 320, height = 240;
   std::uint64_t seed = 1;
   fs::path map = fs::temp_directory_path() / "placedb-scale-bench.placedb";
@@ -138,12 +140,18 @@ constexpr const char* kUsage = R"(usage:
   placedb_scale_bench --frames N [--seed S] [--width W] [--height H] --show Q R PNG
   placedb_scale_bench --frames N [--width W] [--height H] [--queries Q] [--mapped M]
                       --query-only MAP
+  placedb_scale_bench --frames N [--width W] [--height H] [--wm-max M] [--frame-times CSV]
+                      --remap MAP FIRST COUNT
 
 Maps N synthetic frames (default 100000 at 320x240, wm_max 1500, windows of 5000) and prints
 one row per window: frame time p50/p99/max, tiers, RSS, file bytes per location, reopen and
 query times, loop closures against the exact ground truth, and per-stage means.
   --closures CSV     one row per accepted closure, with how its two views relate
   --frame-times CSV  one row per frame: its time, stage times and tier moves
+  --remap MAP FIRST COUNT
+                     a new session on MAP (made by this bench with the same --frames, size and
+                     seed; it is changed) maps frames FIRST.. again and prints one row: what a
+                     frame costs on a map that size, without making the map again
   --set key=value    any engine setting (as placedb's --set); wm_max comes from --wm-max
 See bench/scale/README.md for the columns and the runs measured so far.
 )";
@@ -160,6 +168,16 @@ Flags parseFlags(int argc, char** argv) {
       if (i + 1 >= argc) throw std::invalid_argument(flag + " needs a map");
       f.map = argv[++i];
       (flag == "--reopen-only" ? f.reopen_only : f.query_only) = true;
+      continue;
+    }
+    if (flag == "--remap") {
+      if (i + 3 >= argc) throw std::invalid_argument(flag + " needs MAP FIRST COUNT");
+      f.map = argv[i + 1];
+      f.remap_from = std::stoi(argv[i + 2]);
+      f.remap_count = std::stoi(argv[i + 3]);
+      if (f.remap_from < 0 || f.remap_count < 1)
+        throw std::invalid_argument("--remap needs FIRST >= 0 and COUNT >= 1");
+      i += 3;
       continue;
     }
     if (flag == "--show") {
@@ -310,6 +328,62 @@ QueryFigures measureQueries(const Flags& flags, const placedb::Options& options,
   return out;
 }
 
+void writeFrameTimes(std::FILE* out, int frame, double ms, const placedb::FrameResult& r) {
+  const placedb::StageTimes& t = r.times;
+  fmt::print(out, "{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{},{},{},{}\n", frame,
+             ms, t.features, t.quantisation, t.likelihood, t.filter, t.verification, t.memory,
+             t.storage, r.retrieved, r.retrieved_by_search, r.transferred,
+             int(r.hypothesis.accepted));
+}
+
+std::FILE* openFrameTimes(const Flags& flags) {
+  if (flags.frame_times.empty()) return nullptr;
+  std::FILE* out = std::fopen(flags.frame_times.c_str(), "w");
+  if (!out) throw std::runtime_error("cannot write " + flags.frame_times.string());
+  fmt::print(out,
+             "frame,ms,features,quantisation,likelihood,filter,verification,memory,storage,"
+             "retrieved,retrieved_by_search,transferred,accepted\n");
+  return out;
+}
+
+// --remap: frames of the sequence mapped again, in a new session, on a map this bench made.
+int remap(const Flags& flags, const placedb::Options& options,
+          const placedb::synthetic::SyntheticSequence& seq) {
+  if (!fs::exists(flags.map)) throw std::runtime_error(flags.map.string() + ": no such map");
+  const int last = std::min(seq.size(), flags.remap_from + flags.remap_count);
+  if (flags.remap_from >= last)
+    throw std::invalid_argument("--remap: frame " + std::to_string(flags.remap_from) +
+                                " is past the sequence's " + std::to_string(seq.size()));
+  std::FILE* frame_times = openFrameTimes(flags);
+  auto map = placedb::Map::open(flags.map.string(), options);
+  map->beginSession("scale bench remap");
+  std::vector<double> times;
+  StageSums stages;
+  int accepted = 0;
+  for (int i = flags.remap_from; i < last; ++i) {
+    cv::Mat image = seq.render(i);
+    auto start = Clock::now();
+    placedb::FrameResult r = map->process(image, i, "frame " + std::to_string(i));
+    times.push_back(msBetween(start, Clock::now()));
+    stages.add(r);
+    accepted += r.hypothesis.accepted;
+    if (frame_times) writeFrameTimes(frame_times, i, times.back(), r);
+  }
+  map->close();
+  if (frame_times) std::fclose(frame_times);
+  fmt::print(
+      "{}: frames {}-{} again: p50 {:.2f} ms, p99 {:.2f} ms | feat {:.2f} quant {:.2f} filt {:.2f} "
+      "verif {:.2f} mem {:.2f} stor {:.2f} (ms), mem p99 {:.2f}, retr {:.2f} srch {:.2f} a "
+      "frame; {} closures\n",
+      flags.map.string(), flags.remap_from, last - 1, percentile(times, 50), percentile(times, 99),
+      stages.mean(&placedb::StageTimes::features), stages.mean(&placedb::StageTimes::quantisation),
+      stages.mean(&placedb::StageTimes::filter), stages.mean(&placedb::StageTimes::verification),
+      stages.mean(&placedb::StageTimes::memory), stages.mean(&placedb::StageTimes::storage),
+      percentile(stages.memory, 99), stages.perFrame(stages.retrieved),
+      stages.perFrame(stages.by_search), accepted);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -348,6 +422,7 @@ int main(int argc, char** argv) {
                  q.found, q.asked, q.p50, q.max);
       return 0;
     }
+    if (flags.remap_from >= 0) return remap(flags, options, seq);
     if (!flags.show_png.empty()) {
       // The third panel is r drawn in q's camera with the exact homography of the ground: where
       // it lines up with the first, the two frames show the same ground.
@@ -373,14 +448,7 @@ int main(int argc, char** argv) {
                  "q,location,n_frames,frames,r,gap,iou,shared,heading_deg,listed,same,inliers,"
                  "matches,log10_nfa,posterior\n");
     }
-    std::FILE* frame_times = nullptr;
-    if (!flags.frame_times.empty()) {
-      frame_times = std::fopen(flags.frame_times.c_str(), "w");
-      if (!frame_times) throw std::runtime_error("cannot write " + flags.frame_times.string());
-      fmt::print(frame_times,
-                 "frame,ms,features,quantisation,likelihood,filter,verification,memory,storage,"
-                 "retrieved,retrieved_by_search,transferred,accepted\n");
-    }
+    std::FILE* frame_times = openFrameTimes(flags);
     fmt::print(
         "scale profile: {} frames {}x{}, seed {}, {} revisiting frames (first at {}), "
         "planned in {:.1f} s\n",
@@ -411,14 +479,7 @@ int main(int argc, char** argv) {
       placedb::FrameResult r = map->process(image, i, "frame " + std::to_string(i));
       window_times.push_back(msBetween(start, Clock::now()));
       stages.add(r);
-      if (frame_times) {
-        const placedb::StageTimes& t = r.times;
-        fmt::print(frame_times,
-                   "{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{},{},{},{}\n", i,
-                   window_times.back(), t.features, t.quantisation, t.likelihood, t.filter,
-                   t.verification, t.memory, t.storage, r.retrieved, r.retrieved_by_search,
-                   r.transferred, int(r.hypothesis.accepted));
-      }
+      if (frame_times) writeFrameTimes(frame_times, i, window_times.back(), r);
       locations = std::max(locations, r.location_id);
       if (r.hypothesis.accepted) {
         ++accepted;
