@@ -211,6 +211,12 @@ TEST(MemoryTiers, RandomHistoryKeepsEveryLocationInExactlyOneTier) {
     m.transferToLtm(chosen);
     ASSERT_EQ(m.checkInvariants(), "") << "frame " << frame;
     ASSERT_EQ(m.stm().size() + m.wmSize() + m.ltmSize(), created - merged) << frame;
+    // wm() is kept as locations come and go, not derived when asked: it must still be every
+    // location whose record says WM, by id.
+    std::vector<MemoryLocationId> in_wm;
+    for (const LocationRecord& r : m.snapshot().locations)
+      if (r.tier == Tier::kWm) in_wm.push_back(r.id);
+    ASSERT_EQ(m.wm(), in_wm) << "frame " << frame;
     if (frame % 500 == 0) {
       MemoryTiers copy(s);
       copy.restore(m.snapshot());

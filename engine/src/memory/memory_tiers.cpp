@@ -64,11 +64,14 @@ void MemoryTiers::enterWm(LocationRecord& r) {
   r.tier = Tier::kWm;
   wm_by_priority_.emplace(r.weight, r.age, r.id);
   wm_by_age_.emplace(r.age, r.id);
+  wm_ids_.insert(std::lower_bound(wm_ids_.begin(), wm_ids_.end(), r.id), r.id);
 }
 
 void MemoryTiers::leaveWm(const LocationRecord& r) {
   wm_by_priority_.erase(Priority{r.weight, r.age, r.id});
   wm_by_age_.erase({r.age, r.id});
+  const auto at = std::lower_bound(wm_ids_.begin(), wm_ids_.end(), r.id);
+  if (at != wm_ids_.end() && *at == r.id) wm_ids_.erase(at);
 }
 
 void MemoryTiers::removeEverywhere(MemoryLocationId id) {
@@ -240,14 +243,6 @@ Tier MemoryTiers::tierOf(MemoryLocationId id) const { return recordOf(id).tier; 
 std::int64_t MemoryTiers::weightOf(MemoryLocationId id) const { return recordOf(id).weight; }
 std::int64_t MemoryTiers::ageOf(MemoryLocationId id) const { return recordOf(id).age; }
 
-std::vector<MemoryLocationId> MemoryTiers::wm() const {
-  std::vector<MemoryLocationId> ids;
-  ids.reserve(wm_by_age_.size());
-  for (const auto& entry : wm_by_age_) ids.push_back(entry.second);
-  std::sort(ids.begin(), ids.end());
-  return ids;
-}
-
 std::vector<MemoryLocationId> MemoryTiers::ltm() const {
   std::vector<MemoryLocationId> ids;
   ids.reserve(ltm_count_);
@@ -265,10 +260,14 @@ std::string MemoryTiers::checkInvariants() const {
     ++seen[id];
     if (!stm_ids.insert(id).second) return "location " + idText(id) + " twice in STM";
   }
-  if (wm_by_priority_.size() != wm_by_age_.size()) return "WM indexes differ in size";
+  if (wm_by_priority_.size() != wm_by_age_.size() || wm_ids_.size() != wm_by_age_.size())
+    return "WM indexes differ in size";
+  if (!std::is_sorted(wm_ids_.begin(), wm_ids_.end())) return "WM ids out of order";
   for (const auto& [weight, age, id] : wm_by_priority_) {
     ++seen[id];
     if (wm_by_age_.count({age, id}) == 0) return "WM location " + idText(id) + " lacks its age";
+    if (!std::binary_search(wm_ids_.begin(), wm_ids_.end(), id))
+      return "WM location " + idText(id) + " lacks its id";
     const LocationRecord* rec = records_.find(id);
     if (!rec || rec->weight != weight || rec->age != age) {
       return "WM location " + idText(id) + " indexed with a stale weight or age";

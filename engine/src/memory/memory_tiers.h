@@ -126,7 +126,7 @@ class MemoryTiers {
   std::int64_t weightOf(MemoryLocationId id) const;
   std::int64_t ageOf(MemoryLocationId id) const;
   const std::deque<MemoryLocationId>& stm() const { return stm_; }
-  std::vector<MemoryLocationId> wm() const;   // sorted by id
+  const std::vector<MemoryLocationId>& wm() const { return wm_ids_; }  // sorted by id
   std::vector<MemoryLocationId> ltm() const;  // sorted by id; a pass over every location
   std::size_t wmSize() const { return wm_by_priority_.size(); }
   std::size_t ltmSize() const { return ltm_count_; }
@@ -159,6 +159,8 @@ class MemoryTiers {
   std::set<Priority> wm_by_priority_;                              // transfer order
   std::set<std::pair<std::int64_t, MemoryLocationId>> wm_by_age_;  // newest part
   std::size_t ltm_count_ = 0;                                      // records in LTM
+  // The filter asks for WM by id every frame: kept sorted here, not sorted out of wm_by_age_.
+  std::vector<MemoryLocationId> wm_ids_;
   std::set<MemoryLocationId> retrieved_this_frame_;
   std::int64_t next_age_ = 0;
 };
