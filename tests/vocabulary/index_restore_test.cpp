@@ -122,6 +122,26 @@ TEST(Index, ErasedWordsAreNeverReturnedAndReinsertedOnesAre) {
 
   EXPECT_THROW(v.insert({back[0]}, back_rows.row(0), {1}), Error);  // already in RAM
   EXPECT_THROW(v.erase({erased[0]}), Error);                        // not in RAM
+
+  // A word given twice, in order or not, is refused before anything enters the index.
+  const std::size_t size = v.size();
+  cv::Mat three;
+  cv::vconcat(std::vector<cv::Mat>{words.row(int(erased[0])), words.row(int(erased[1])),
+                                   words.row(int(erased[0]))},
+              three);
+  for (const std::vector<std::int64_t>& ids :
+       {std::vector<std::int64_t>{erased[0], erased[0], erased[1]},
+        std::vector<std::int64_t>{erased[1], erased[0], erased[1]}}) {
+    try {
+      v.insert(ids, three, {1, 2, 3});
+      ADD_FAILURE() << "a word given twice was inserted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("given twice"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(v.size(), size);
+    EXPECT_FALSE(v.contains(erased[0]));
+    EXPECT_FALSE(v.contains(erased[1]));
+  }
 }
 
 // A recorded sequence of calls, replayed on vocabularies that may be restarted along the way.

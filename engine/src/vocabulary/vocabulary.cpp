@@ -5,7 +5,6 @@
 #include <limits>
 #include <numeric>
 #include <sstream>
-#include <unordered_set>
 
 #include "features/feature_options.h"
 #include "features/parallel_for.h"
@@ -19,8 +18,14 @@ namespace {
 // several loads in flight, few enough that their marks and queues stay in L1 cache.
 constexpr int kSearchGroup = 8;
 
+[[noreturn]] void fail(const std::string& message) {
+  throw Error(ErrorCode::kInvalidArgument, "vocabulary: " + message);
+}
+
+// For checks once per call; a check per word tests first and only then builds its message
+// (a retrieval checks thousands of words a frame).
 void require(bool ok, const std::string& message) {
-  if (!ok) throw Error(ErrorCode::kInvalidArgument, "vocabulary: " + message);
+  if (!ok) fail(message);
 }
 
 std::string formatFloat(float v) {
@@ -191,12 +196,20 @@ void Vocabulary::insert(const std::vector<std::int64_t>& ids, const cv::Mat& des
   checkDescriptors(descriptors, "insert");
   require(std::size_t(descriptors.rows) == ids.size() && created_frames.size() == ids.size(),
           "insert: ids, descriptors and created frames differ in count");
-  std::unordered_set<std::int64_t> given;
   for (std::int64_t id : ids) {
-    require(id >= 0, "insert: negative word id " + std::to_string(id));
-    require(!contains(id), "insert: word " + std::to_string(id) + " is already in RAM");
-    require(given.insert(id).second, "insert: word " + std::to_string(id) + " given twice");
+    if (id < 0) fail("insert: negative word id " + std::to_string(id));
+    if (contains(id)) fail("insert: word " + std::to_string(id) + " is already in RAM");
   }
+  // Retrievals hand their ids sorted; other callers pay for a sorted copy.
+  std::vector<std::int64_t> copy;
+  const std::vector<std::int64_t>* sorted = &ids;
+  if (!std::is_sorted(ids.begin(), ids.end())) {
+    copy = ids;
+    std::sort(copy.begin(), copy.end());
+    sorted = &copy;
+  }
+  const auto twice = std::adjacent_find(sorted->begin(), sorted->end());
+  if (twice != sorted->end()) fail("insert: word " + std::to_string(*twice) + " given twice");
   touched_ = true;
   const cv::Mat rows = descriptors.isContinuous() ? descriptors : descriptors.clone();
   std::vector<std::uint32_t> slots(ids.size());
@@ -214,7 +227,7 @@ void Vocabulary::continueAt(std::int64_t next_word_id) {
 
 void Vocabulary::erase(const std::vector<std::int64_t>& ids) {
   for (std::int64_t id : ids) {
-    require(contains(id), "erase: word " + std::to_string(id) + " is not in RAM");
+    if (!contains(id)) fail("erase: word " + std::to_string(id) + " is not in RAM");
   }
   touched_ = true;
   for (std::int64_t id : ids) {
@@ -314,8 +327,8 @@ void Vocabulary::restore(const IndexState& state, const std::vector<std::int64_t
     load(begin, count, store_.mutableData(first), created.data());
     for (std::size_t k = 0; k < count; ++k) {
       const std::int64_t id = ids[begin + k];
-      require(id >= 0 && !contains(id),
-              "restore: word " + std::to_string(id) + " negative or given twice");
+      if (id < 0 || contains(id))
+        fail("restore: word " + std::to_string(id) + " negative or given twice");
       const auto slot = static_cast<std::uint32_t>(first + k);
       store_.setRecord(slot, id, created[k]);
       slot_of_.set(id, slot);
