@@ -158,6 +158,42 @@ TEST(InvertedIndex, MatchesBruteForceThroughAddsRemovesAndReplaces) {
   EXPECT_EQ(index.locationCount(), locations.size());
 }
 
+TEST(InvertedIndex, WordsLeaveAndComeBackAsLocationsMoveBetweenTiers) {
+  // Transfers and retrievals drop and re-add whole signatures, so words leave the index and
+  // return by the thousand: every count must follow, whichever words shared a table cell.
+  std::mt19937_64 rng(7);
+  InvertedIndex index;
+  std::map<LocationId, Signature> locations;
+  std::map<LocationId, Signature> away;  // removed, to come back later
+  std::uniform_int_distribution<int> coin(0, 2);
+  for (LocationId id = 0; id < 400; ++id) {
+    locations[id] = randomSignature(rng, 20000);
+    index.add(id, locations[id]);
+  }
+  for (int step = 0; step < 4000; ++step) {
+    if ((coin(rng) != 0 || away.empty()) && !locations.empty()) {
+      auto it = std::next(locations.begin(),
+                          std::uniform_int_distribution<std::size_t>(0, locations.size() - 1)(rng));
+      index.remove(it->first);
+      away.insert(*it);
+      locations.erase(it);
+    } else {
+      auto it = std::next(away.begin(),
+                          std::uniform_int_distribution<std::size_t>(0, away.size() - 1)(rng));
+      index.add(it->first, it->second);
+      locations.insert(*it);
+      away.erase(it);
+    }
+    if (step % 250 != 0) continue;
+    const auto refs = expectedReferences(locations);
+    ASSERT_EQ(index.wordCount(), refs.size()) << "step " << step;
+    for (const auto& [word, count] : refs) ASSERT_EQ(index.referenceCount(word), count) << word;
+    for (const auto& [id, signature] : away)
+      for (const auto& e : signature.entries())
+        if (!refs.count(e.word)) ASSERT_FALSE(index.isReferenced(e.word)) << e.word;
+  }
+}
+
 TEST(InvertedIndex, FreedWordCounterMatchesJointRemoval) {
   // A vocabulary of 3000 words over 120 bags: most words are shared by a few locations, some
   // by one, so setting locations aside frees words gradually.

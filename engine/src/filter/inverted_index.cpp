@@ -15,7 +15,7 @@ WordChanges InvertedIndex::add(LocationId location, const Signature& signature) 
   }
   WordChanges changes;
   for (const auto& e : signature.entries()) {
-    auto& list = postings_[e.word];
+    auto& list = listOf(e.word);
     if (list.empty()) changes.referenced.push_back(e.word);
     // Kept sorted by location: new locations have the largest ids, so this is nearly always an
     // append; a location retrieved from LTM lands in the middle.
@@ -35,13 +35,13 @@ WordChanges InvertedIndex::remove(LocationId location) {
   }
   WordChanges changes;
   for (const auto& e : found->second.entries()) {
-    auto word_it = postings_.find(e.word);
-    if (word_it == postings_.end()) {
+    const std::uint32_t index = slots_.find(e.word);
+    if (index == WordSlots::kNone) {
       throw Error(ErrorCode::kInternal, "inverted index: word " + std::to_string(e.word) +
                                             " of location " + std::to_string(location) +
                                             " has no postings");
     }
-    auto& list = word_it->second;
+    auto& list = lists_[index];
     auto pos = std::lower_bound(list.begin(), list.end(), location,
                                 [](const Posting& p, LocationId id) { return p.location < id; });
     if (pos == list.end() || pos->location != location) {
@@ -51,7 +51,7 @@ WordChanges InvertedIndex::remove(LocationId location) {
     }
     list.erase(pos);
     if (list.empty()) {
-      postings_.erase(word_it);
+      dropList(e.word);
       changes.unreferenced.push_back(e.word);
     }
   }
@@ -83,8 +83,8 @@ const Signature& InvertedIndex::signatureOf(LocationId location) const {
 }
 
 std::size_t InvertedIndex::referenceCount(WordId word) const {
-  auto it = postings_.find(word);
-  return it == postings_.end() ? 0 : it->second.size();
+  const std::vector<Posting>* list = findList(word);
+  return list ? list->size() : 0;
 }
 
 std::vector<LocationSimilarity> InvertedIndex::similarities(const Signature& query,
@@ -92,9 +92,9 @@ std::vector<LocationSimilarity> InvertedIndex::similarities(const Signature& que
   // Integer pair counts are order-independent, so the hash map cannot change the results.
   std::unordered_map<LocationId, std::int64_t> paired;
   for (const auto& e : query.entries()) {
-    auto word_it = postings_.find(e.word);
-    if (word_it == postings_.end()) continue;
-    for (const Posting& p : word_it->second) paired[p.location] += std::min(e.count, p.count);
+    const std::vector<Posting>* list = findList(e.word);
+    if (!list) continue;
+    for (const Posting& p : *list) paired[p.location] += std::min(e.count, p.count);
   }
   std::vector<LocationSimilarity> out;
   out.reserve(paired.size());
@@ -117,7 +117,7 @@ std::vector<WordId> InvertedIndex::wordsFreedByRemoving(
   for (LocationId location : leaving) {
     for (const auto& e : signatureOf(location).entries()) {
       if (!seen.insert(e.word).second) continue;
-      const auto& list = postings_.at(e.word);
+      const auto& list = *findList(e.word);
       const bool all_leaving = std::all_of(list.begin(), list.end(), [&](const Posting& p) {
         return leaving.count(p.location) != 0;
       });
@@ -126,6 +126,82 @@ std::vector<WordId> InvertedIndex::wordsFreedByRemoving(
   }
   std::sort(freed.begin(), freed.end());
   return freed;
+}
+
+std::size_t InvertedIndex::WordSlots::home(WordId word) const {
+  // Word ids are dense and consecutive: a multiplicative hash spreads runs of them.
+  return static_cast<std::size_t>((static_cast<std::uint64_t>(word) * 0x9e3779b97f4a7c15ull) >>
+                                  17) &
+         (cells_.size() - 1);
+}
+
+std::uint32_t InvertedIndex::WordSlots::find(WordId word) const {
+  if (cells_.empty()) return kNone;
+  for (std::size_t i = home(word);; i = (i + 1) & (cells_.size() - 1)) {
+    const Cell& c = cells_[i];
+    if (c.list == kNone) return kNone;
+    if (c.word == word) return c.list;
+  }
+}
+
+void InvertedIndex::WordSlots::set(WordId word, std::uint32_t list) {
+  if ((size_ + 1) * 2 > cells_.size()) grow();
+  std::size_t i = home(word);
+  while (cells_[i].list != kNone) i = (i + 1) & (cells_.size() - 1);
+  cells_[i] = {word, list};
+  ++size_;
+}
+
+void InvertedIndex::WordSlots::erase(WordId word) {
+  const std::size_t mask = cells_.size() - 1;
+  std::size_t i = home(word);
+  while (cells_[i].word != word || cells_[i].list == kNone) i = (i + 1) & mask;
+  // Backward shift: move later cells of the probe run into the hole when their home allows.
+  for (std::size_t j = (i + 1) & mask;; j = (j + 1) & mask) {
+    if (cells_[j].list == kNone) break;
+    const std::size_t h = home(cells_[j].word);
+    const bool between = i <= j ? (h > i && h <= j) : (h > i || h <= j);
+    if (between) continue;
+    cells_[i] = cells_[j];
+    i = j;
+  }
+  cells_[i].list = kNone;
+  --size_;
+}
+
+void InvertedIndex::WordSlots::grow() {
+  std::vector<Cell> old;
+  old.swap(cells_);
+  cells_.assign(std::max<std::size_t>(64, old.size() * 2), Cell{0, kNone});
+  size_ = 0;
+  for (const Cell& c : old)
+    if (c.list != kNone) set(c.word, c.list);
+}
+
+std::vector<InvertedIndex::Posting>& InvertedIndex::listOf(WordId word) {
+  std::uint32_t index = slots_.find(word);
+  if (index != WordSlots::kNone) return lists_[index];
+  if (!free_lists_.empty()) {
+    index = free_lists_.back();
+    free_lists_.pop_back();
+  } else {
+    index = static_cast<std::uint32_t>(lists_.size());
+    lists_.emplace_back();
+  }
+  slots_.set(word, index);
+  return lists_[index];
+}
+
+const std::vector<InvertedIndex::Posting>* InvertedIndex::findList(WordId word) const {
+  const std::uint32_t index = slots_.find(word);
+  return index == WordSlots::kNone ? nullptr : &lists_[index];
+}
+
+void InvertedIndex::dropList(WordId word) {
+  const std::uint32_t index = slots_.find(word);
+  lists_[index].clear();
+  free_lists_.push_back(index);
+  slots_.erase(word);
 }
 
 std::size_t FreedWordCounter::setAside(LocationId location) {

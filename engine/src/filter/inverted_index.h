@@ -36,10 +36,10 @@ class InvertedIndex {
   const Signature& signatureOf(LocationId location) const;  // kInvalidArgument when absent
   std::size_t locationCount() const { return signatures_.size(); }
   // Number of distinct words referenced by at least one location.
-  std::size_t wordCount() const { return postings_.size(); }
+  std::size_t wordCount() const { return slots_.size(); }
   // Locations whose signature holds the word (0 when unreferenced).
   std::size_t referenceCount(WordId word) const;
-  bool isReferenced(WordId word) const { return postings_.count(word) != 0; }
+  bool isReferenced(WordId word) const { return findList(word) != nullptr; }
 
   // Similarity with every location sharing at least one word with the query and accepted by the
   // filter (all locations when the filter is empty). Sorted by location id. Locations sharing no
@@ -58,7 +58,33 @@ class InvertedIndex {
   };
   // Postings per word, sorted by location; a word with no posting is erased, so the map's keys
   // are the referenced words.
-  std::unordered_map<WordId, std::vector<Posting>> postings_;
+  // Word -> list index, open addressing (linear probing, backward-shift erase): a transfer and a
+  // retrieval drop and re-add hundreds of words a frame, which a node map pays in allocations.
+  class WordSlots {
+   public:
+    static constexpr std::uint32_t kNone = 0xffffffffu;
+    std::uint32_t find(WordId word) const;
+    void set(WordId word, std::uint32_t list);  // word must be absent
+    void erase(WordId word);                    // word must be present
+    std::size_t size() const { return size_; }
+
+   private:
+    struct Cell {
+      WordId word;
+      std::uint32_t list;
+    };
+    std::size_t home(WordId word) const;
+    void grow();
+    std::vector<Cell> cells_;  // list == kNone: empty
+    std::size_t size_ = 0;
+  };
+  std::vector<Posting>& listOf(WordId word);  // creates an empty one
+  const std::vector<Posting>* findList(WordId word) const;
+  void dropList(WordId word);
+
+  WordSlots slots_;
+  std::vector<std::vector<Posting>> lists_;  // reused: a dropped list keeps its capacity
+  std::vector<std::uint32_t> free_lists_;
   std::unordered_map<LocationId, Signature> signatures_;
 };
 
