@@ -51,7 +51,7 @@ WordChanges InvertedIndex::remove(LocationId location) {
     }
     list.erase(pos);
     if (list.empty()) {
-      dropList(e.word);
+      dropList(e.word, index);
       changes.unreferenced.push_back(e.word);
     }
   }
@@ -197,8 +197,7 @@ const std::vector<InvertedIndex::Posting>* InvertedIndex::findList(WordId word) 
   return index == WordSlots::kNone ? nullptr : &lists_[index];
 }
 
-void InvertedIndex::dropList(WordId word) {
-  const std::uint32_t index = slots_.find(word);
+void InvertedIndex::dropList(WordId word, std::uint32_t index) {
   lists_[index].clear();
   free_lists_.push_back(index);
   slots_.erase(word);

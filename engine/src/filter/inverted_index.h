@@ -80,7 +80,7 @@ class InvertedIndex {
   };
   std::vector<Posting>& listOf(WordId word);  // creates an empty one
   const std::vector<Posting>* findList(WordId word) const;
-  void dropList(WordId word);
+  void dropList(WordId word, std::uint32_t index);  // index: the word's list, found by the caller
 
   WordSlots slots_;
   std::vector<std::vector<Posting>> lists_;  // reused: a dropped list keeps its capacity
