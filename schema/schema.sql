@@ -56,7 +56,6 @@ CREATE TABLE locations (
   tier INTEGER NOT NULL CHECK (tier IN (0, 1, 2)),  -- 0 STM, 1 WM, 2 LTM
   created_frame INTEGER REFERENCES frames (id) DEFERRABLE INITIALLY DEFERRED
 );
-CREATE INDEX locations_by_tier ON locations (tier, weight);
 CREATE INDEX locations_by_session ON locations (session_id);
 CREATE INDEX locations_by_created_frame ON locations (created_frame);  -- schema 12
 
@@ -315,5 +314,5 @@ INSERT INTO engine_state (key, value, checksum) VALUES ('storage.kd_nodes.rows',
 
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 13;
+PRAGMA user_version = 14;
 COMMIT;

@@ -248,9 +248,10 @@ void downgradeToSchemaTwo(const std::string& path) {
   exec("CREATE INDEX word_refs_by_word ON word_refs (word_id, location_id)");  // schema 10
   for (const char* table :
        {"session_memory", "session_posterior", "session_kd_nodes", "session_state", "id_blocks"})
-    exec(std::string("DROP TABLE ") + table);     // schema 11
-  exec("DROP INDEX locations_by_created_frame");  // schema 12
-  exec("DROP TABLE location_word_descriptors");   // schema 13
+    exec(std::string("DROP TABLE ") + table);                          // schema 11
+  exec("DROP INDEX locations_by_created_frame");                       // schema 12
+  exec("DROP TABLE location_word_descriptors");                        // schema 13
+  exec("CREATE INDEX locations_by_tier ON locations (tier, weight)");  // schema 14
   exec("PRAGMA user_version = 2");
   exec("COMMIT");
   sqlite3_close(db);
