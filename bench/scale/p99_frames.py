@@ -9,7 +9,10 @@ frame time, then the mean stage times and tier moves of the frames at or above t
 and of all the others ("rest"): a p99 that grows with the map shows here which stage and which
 per-frame work grow with it. Last, per window, the least-squares line memory = a + b x retrieved
 over its frames: a is what every frame pays whatever it retrieves (the place-code scan grows it
-with the map), b what each retrieval and the transfer that makes room for it cost.
+with the map), b what each retrieval and the transfer that makes room for it cost. Where the file
+has the bench's disk_kb column, per window too: how many frames read the disk (pages the page
+cache no longer held) and how many of those are at or above the p99, and the p99 of the frames
+that read nothing from it, which is the engine's own work without waits on the disk.
 """
 import argparse
 import csv
@@ -79,6 +82,24 @@ def main():
             a, b = fit_line([float(r['retrieved']) for r in frames],
                             [float(r['memory']) for r in frames])
             print(f'{w:>6} {a:>7.3f} {b:>7.3f}')
+    if rows and 'disk_kb' in rows[0]:
+        print_disk(windows, wanted)
+
+
+def print_disk(windows, wanted):
+    print(f'\n{"window":>6} {"p99 ms":>7} {"disk fr":>7} {"in top":>6} {"disk MB":>7} '
+          f'{"p99 w/o":>7}   frames that read the disk; p99 of those that did not')
+    for w in wanted:
+        frames = windows.get(w, [])
+        if not frames:
+            continue
+        p99 = percentile([float(r['ms']) for r in frames], 99)
+        disk = [r for r in frames if int(r['disk_kb']) > 0]
+        top = sum(1 for r in disk if float(r['ms']) >= p99)
+        clean = [float(r['ms']) for r in frames if int(r['disk_kb']) == 0]
+        mb = sum(int(r['disk_kb']) for r in frames) / 1024
+        without = f'{percentile(clean, 99):>7.2f}' if clean else f'{"-":>7}'
+        print(f'{w:>6} {p99:>7.2f} {len(disk):>7} {top:>6} {mb:>7.1f} {without}')
 
 
 if __name__ == '__main__':

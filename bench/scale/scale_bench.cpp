@@ -9,11 +9,12 @@
 // --closures writes one row per accepted closure with how the query's view relates to the
 // hypothesis frame that best matches it (footprint IoU, shared ground, heading, gap), so a
 // closure the ground truth calls false can be checked frame by frame; --frame-times writes every
-// frame's stage times and tier moves, so the frames behind a window's p99 can be told apart from
-// the rest; --show writes frames Q and R of the same sequence side by side, then R warped into
-// Q's view, to look at one.
+// frame's stage times, tier moves and what it read from the disk rather than the page cache, so
+// the frames behind a window's p99 can be told apart from the rest; --show writes frames Q and R
+// of the same sequence side by side, then R warped into Q's view, to look at one.
 //
 // Rows are printed as each window ends, so a run stopped early still leaves its figures.
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 #include <malloc.h>
@@ -24,6 +25,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -81,7 +84,9 @@ struct StageSums {
   std::vector<placedb::StageTimes> frames;
   std::vector<double> memory, storage;
   std::size_t retrieved = 0, by_search = 0;  // tier moves, which grow with revisits
-  void add(const placedb::FrameResult& r) {
+  std::uint64_t disk_bytes = 0;              // read from storage, not from the page cache
+  void add(const placedb::FrameResult& r, std::uint64_t disk) {
+    disk_bytes += disk;
     frames.push_back(r.times);
     memory.push_back(r.times.memory);
     storage.push_back(r.times.storage);
@@ -96,6 +101,33 @@ struct StageSums {
     for (const auto& t : frames) sum += t.*stage;
     return frames.empty() ? 0.0 : sum / double(frames.size());
   }
+};
+
+// What this thread has had read from storage rather than served by the page cache
+// (/proc/thread-self/io, read_bytes): a frame that waits on the disk for its long-term memory
+// shows here, which its stage times cannot tell from slower work. 0 where the kernel does not
+// account I/O.
+class DiskReads {
+ public:
+  DiskReads() : fd_(::open("/proc/thread-self/io", O_RDONLY | O_CLOEXEC)) {}
+  ~DiskReads() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  DiskReads(const DiskReads&) = delete;
+  DiskReads& operator=(const DiskReads&) = delete;
+
+  std::uint64_t bytes() const {
+    char text[512];
+    const ssize_t n = fd_ >= 0 ? ::pread(fd_, text, sizeof text - 1, 0) : -1;
+    if (n <= 0) return 0;
+    text[n] = '\0';
+    static constexpr char kField[] = "\nread_bytes: ";
+    const char* field = std::strstr(text, kField);
+    return field ? std::strtoull(field + sizeof kField - 1, nullptr, 10) : 0;
+  }
+
+ private:
+  int fd_;
 };
 
 double peakRssMiB() {
@@ -147,7 +179,8 @@ Maps N synthetic frames (default 100000 at 320x240, wm_max 1500, windows of 5000
 one row per window: frame time p50/p99/max, tiers, RSS, file bytes per location, reopen and
 query times, loop closures against the exact ground truth, and per-stage means.
   --closures CSV     one row per accepted closure, with how its two views relate
-  --frame-times CSV  one row per frame: its time, stage times and tier moves
+  --frame-times CSV  one row per frame: its time, stage times, tier moves and the KB it read
+                     from the disk (pages the page cache no longer held)
   --remap MAP FIRST COUNT
                      a new session on MAP (made by this bench with the same --frames, size and
                      seed; it is changed) maps frames FIRST.. again and prints one row: what a
@@ -328,12 +361,13 @@ QueryFigures measureQueries(const Flags& flags, const placedb::Options& options,
   return out;
 }
 
-void writeFrameTimes(std::FILE* out, int frame, double ms, const placedb::FrameResult& r) {
+void writeFrameTimes(std::FILE* out, int frame, double ms, const placedb::FrameResult& r,
+                     std::uint64_t disk_bytes) {
   const placedb::StageTimes& t = r.times;
-  fmt::print(out, "{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{},{},{},{}\n", frame,
-             ms, t.features, t.quantisation, t.likelihood, t.filter, t.verification, t.memory,
-             t.storage, r.retrieved, r.retrieved_by_search, r.transferred,
-             int(r.hypothesis.accepted));
+  fmt::print(out, "{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{},{},{},{},{}\n",
+             frame, ms, t.features, t.quantisation, t.likelihood, t.filter, t.verification,
+             t.memory, t.storage, r.retrieved, r.retrieved_by_search, r.transferred,
+             int(r.hypothesis.accepted), disk_bytes / 1024);
 }
 
 std::FILE* openFrameTimes(const Flags& flags) {
@@ -342,7 +376,7 @@ std::FILE* openFrameTimes(const Flags& flags) {
   if (!out) throw std::runtime_error("cannot write " + flags.frame_times.string());
   fmt::print(out,
              "frame,ms,features,quantisation,likelihood,filter,verification,memory,storage,"
-             "retrieved,retrieved_by_search,transferred,accepted\n");
+             "retrieved,retrieved_by_search,transferred,accepted,disk_kb\n");
   return out;
 }
 
@@ -360,27 +394,30 @@ int remap(const Flags& flags, const placedb::Options& options,
   std::vector<double> times;
   StageSums stages;
   int accepted = 0;
+  const DiskReads disk;
   for (int i = flags.remap_from; i < last; ++i) {
     cv::Mat image = seq.render(i);
+    const std::uint64_t disk_before = disk.bytes();
     auto start = Clock::now();
     placedb::FrameResult r = map->process(image, i, "frame " + std::to_string(i));
     times.push_back(msBetween(start, Clock::now()));
-    stages.add(r);
+    const std::uint64_t frame_disk = disk.bytes() - disk_before;
+    stages.add(r, frame_disk);
     accepted += r.hypothesis.accepted;
-    if (frame_times) writeFrameTimes(frame_times, i, times.back(), r);
+    if (frame_times) writeFrameTimes(frame_times, i, times.back(), r, frame_disk);
   }
   map->close();
   if (frame_times) std::fclose(frame_times);
   fmt::print(
       "{}: frames {}-{} again: p50 {:.2f} ms, p99 {:.2f} ms | feat {:.2f} quant {:.2f} filt {:.2f} "
       "verif {:.2f} mem {:.2f} stor {:.2f} (ms), mem p99 {:.2f}, retr {:.2f} srch {:.2f} a "
-      "frame; {} closures\n",
+      "frame; {} closures; {:.1f} MB read from disk\n",
       flags.map.string(), flags.remap_from, last - 1, percentile(times, 50), percentile(times, 99),
       stages.mean(&placedb::StageTimes::features), stages.mean(&placedb::StageTimes::quantisation),
       stages.mean(&placedb::StageTimes::filter), stages.mean(&placedb::StageTimes::verification),
       stages.mean(&placedb::StageTimes::memory), stages.mean(&placedb::StageTimes::storage),
       percentile(stages.memory, 99), stages.perFrame(stages.retrieved),
-      stages.perFrame(stages.by_search), accepted);
+      stages.perFrame(stages.by_search), accepted, stages.disk_bytes / 1e6);
   return 0;
 }
 
@@ -458,10 +495,10 @@ int main(int argc, char** argv) {
                flags.settings.empty() ? "" : " except --set", flags.map.string());
     fmt::print(
         "{:>7} {:>8} {:>8} {:>8} {:>6} {:>7} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>8} {:>6} {:>6} "
-        "{:>6} | {:>5} {:>5} {:>5} {:>5} {:>5} {:>5} {:>7} {:>7} {:>5} {:>5}\n",
+        "{:>6} | {:>5} {:>5} {:>5} {:>5} {:>5} {:>5} {:>7} {:>7} {:>5} {:>5} {:>7}\n",
         "frames", "p50 ms", "p99 ms", "max ms", "wm", "ltm", "peakRSS", "curRSS", "liveRSS",
         "B/locatn", "reopen ms", "query ms", "q found", "loops", "true", "listed", "feat", "quant",
-        "filt", "verif", "mem", "stor", "mem p99", "stor p99", "retr", "srch");
+        "filt", "verif", "mem", "stor", "mem p99", "stor p99", "retr", "srch", "disk MB");
     std::fflush(stdout);
 
     removeMap(flags.map);
@@ -473,13 +510,16 @@ int main(int argc, char** argv) {
     StageSums stages;
     int accepted = 0, accepted_true = 0, accepted_listed = 0;
     std::int64_t locations = 0;
+    const DiskReads disk;
     for (int i = 0; i < seq.size(); ++i) {
       cv::Mat image = seq.render(i);
+      const std::uint64_t disk_before = disk.bytes();
       auto start = Clock::now();
       placedb::FrameResult r = map->process(image, i, "frame " + std::to_string(i));
       window_times.push_back(msBetween(start, Clock::now()));
-      stages.add(r);
-      if (frame_times) writeFrameTimes(frame_times, i, window_times.back(), r);
+      const std::uint64_t frame_disk = disk.bytes() - disk_before;
+      stages.add(r, frame_disk);
+      if (frame_times) writeFrameTimes(frame_times, i, window_times.back(), r, frame_disk);
       locations = std::max(locations, r.location_id);
       if (r.hypothesis.accepted) {
         ++accepted;
@@ -504,7 +544,7 @@ int main(int argc, char** argv) {
       fmt::print(
           "{:>7} {:>8.2f} {:>8.2f} {:>8.1f} {:>6} {:>7} {:>7.0f}M {:>7.0f}M {:>7.0f}M {:>9.0f} "
           "{:>9.1f} {:>9.1f} {:>5}/{:<2} {:>6} {:>6} {:>6} | {:>5.2f} {:>5.2f} {:>5.2f} {:>5.2f} "
-          "{:>5.2f} {:>5.2f} {:>7.2f} {:>7.2f} {:>5.2f} {:>5.2f}\n",
+          "{:>5.2f} {:>5.2f} {:>7.2f} {:>7.2f} {:>5.2f} {:>5.2f} {:>7.1f}\n",
           i + 1, percentile(window_times, 50), percentile(window_times, 99),
           *std::max_element(window_times.begin(), window_times.end()), r.wm_size, ltm, peakRssMiB(),
           current_rss, liveRssMiB(),
@@ -516,7 +556,8 @@ int main(int argc, char** argv) {
           stages.mean(&placedb::StageTimes::verification),
           stages.mean(&placedb::StageTimes::memory), stages.mean(&placedb::StageTimes::storage),
           percentile(stages.memory, 99), percentile(stages.storage, 99),
-          stages.perFrame(stages.retrieved), stages.perFrame(stages.by_search));
+          stages.perFrame(stages.retrieved), stages.perFrame(stages.by_search),
+          stages.disk_bytes / 1e6);
       std::fflush(stdout);
       window_times.clear();
       stages = StageSums();
