@@ -97,7 +97,7 @@ def print_disk(windows, wanted):
         disk = [r for r in frames if int(r['disk_kb']) > 0]
         top = sum(1 for r in disk if float(r['ms']) >= p99)
         clean = [float(r['ms']) for r in frames if int(r['disk_kb']) == 0]
-        mb = sum(int(r['disk_kb']) for r in frames) / 1024
+        mb = sum(int(r['disk_kb']) for r in frames) * 1024 / 1e6  # MB, as the bench prints
         without = f'{percentile(clean, 99):>7.2f}' if clean else f'{"-":>7}'
         print(f'{w:>6} {p99:>7.2f} {len(disk):>7} {top:>6} {mb:>7.1f} {without}')
 
