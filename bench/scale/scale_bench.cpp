@@ -79,14 +79,23 @@ double percentile(std::vector<double> v, double p) {
                     static_cast<std::size_t>(std::lround(p / 100.0 * (v.size() - 1))))];
 }
 
+// One frame through Map::process: its result, its time and what it read from the disk, both
+// taken around the call alone.
+struct TimedFrame {
+  placedb::FrameResult result;
+  double ms = 0;
+  std::uint64_t disk_bytes = 0;
+};
+
 // One window's stage times.
 struct StageSums {
   std::vector<placedb::StageTimes> frames;
   std::vector<double> memory, storage;
   std::size_t retrieved = 0, by_search = 0;  // tier moves, which grow with revisits
   std::uint64_t disk_bytes = 0;              // read from storage, not from the page cache
-  void add(const placedb::FrameResult& r, std::uint64_t disk) {
-    disk_bytes += disk;
+  void add(const TimedFrame& frame) {
+    const placedb::FrameResult& r = frame.result;
+    disk_bytes += frame.disk_bytes;
     frames.push_back(r.times);
     memory.push_back(r.times.memory);
     storage.push_back(r.times.storage);
@@ -361,13 +370,26 @@ QueryFigures measureQueries(const Flags& flags, const placedb::Options& options,
   return out;
 }
 
-void writeFrameTimes(std::FILE* out, int frame, double ms, const placedb::FrameResult& r,
-                     std::uint64_t disk_bytes) {
+// Rendering, and the reopen and queries at a window's end, fall outside both measures.
+TimedFrame processFrame(placedb::Map& map, const placedb::synthetic::SyntheticSequence& seq, int i,
+                        const DiskReads& disk) {
+  cv::Mat image = seq.render(i);
+  TimedFrame frame;
+  const std::uint64_t disk_before = disk.bytes();
+  auto start = Clock::now();
+  frame.result = map.process(image, i, "frame " + std::to_string(i));
+  frame.ms = msBetween(start, Clock::now());
+  frame.disk_bytes = disk.bytes() - disk_before;
+  return frame;
+}
+
+void writeFrameTimes(std::FILE* out, int i, const TimedFrame& frame) {
+  const placedb::FrameResult& r = frame.result;
   const placedb::StageTimes& t = r.times;
-  fmt::print(out, "{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{},{},{},{},{}\n",
-             frame, ms, t.features, t.quantisation, t.likelihood, t.filter, t.verification,
-             t.memory, t.storage, r.retrieved, r.retrieved_by_search, r.transferred,
-             int(r.hypothesis.accepted), disk_bytes / 1024);
+  fmt::print(out, "{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{},{},{},{},{}\n", i,
+             frame.ms, t.features, t.quantisation, t.likelihood, t.filter, t.verification, t.memory,
+             t.storage, r.retrieved, r.retrieved_by_search, r.transferred,
+             int(r.hypothesis.accepted), frame.disk_bytes / 1024);
 }
 
 std::FILE* openFrameTimes(const Flags& flags) {
@@ -396,15 +418,11 @@ int remap(const Flags& flags, const placedb::Options& options,
   int accepted = 0;
   const DiskReads disk;
   for (int i = flags.remap_from; i < last; ++i) {
-    cv::Mat image = seq.render(i);
-    const std::uint64_t disk_before = disk.bytes();
-    auto start = Clock::now();
-    placedb::FrameResult r = map->process(image, i, "frame " + std::to_string(i));
-    times.push_back(msBetween(start, Clock::now()));
-    const std::uint64_t frame_disk = disk.bytes() - disk_before;
-    stages.add(r, frame_disk);
-    accepted += r.hypothesis.accepted;
-    if (frame_times) writeFrameTimes(frame_times, i, times.back(), r, frame_disk);
+    const TimedFrame frame = processFrame(*map, seq, i, disk);
+    times.push_back(frame.ms);
+    stages.add(frame);
+    accepted += frame.result.hypothesis.accepted;
+    if (frame_times) writeFrameTimes(frame_times, i, frame);
   }
   map->close();
   if (frame_times) std::fclose(frame_times);
@@ -512,14 +530,11 @@ int main(int argc, char** argv) {
     std::int64_t locations = 0;
     const DiskReads disk;
     for (int i = 0; i < seq.size(); ++i) {
-      cv::Mat image = seq.render(i);
-      const std::uint64_t disk_before = disk.bytes();
-      auto start = Clock::now();
-      placedb::FrameResult r = map->process(image, i, "frame " + std::to_string(i));
-      window_times.push_back(msBetween(start, Clock::now()));
-      const std::uint64_t frame_disk = disk.bytes() - disk_before;
-      stages.add(r, frame_disk);
-      if (frame_times) writeFrameTimes(frame_times, i, window_times.back(), r, frame_disk);
+      const TimedFrame frame = processFrame(*map, seq, i, disk);
+      const placedb::FrameResult& r = frame.result;
+      window_times.push_back(frame.ms);
+      stages.add(frame);
+      if (frame_times) writeFrameTimes(frame_times, i, frame);
       locations = std::max(locations, r.location_id);
       if (r.hypothesis.accepted) {
         ++accepted;
