@@ -57,6 +57,7 @@ struct Flags {
   int mapped = 0;            // --query-only: frames the map holds (0: --frames)
   int remap_from = -1;       // --remap: the first frame to map again (-1: no --remap)
   int remap_count = 0;       // --remap: how many
+  bool cold = false;         // --remap: the map's pages leave the OS page cache first
   int width = 320, height = 240;
   std::uint64_t seed = 1;
   fs::path map = fs::temp_directory_path() / "placedb-scale-bench.placedb";
@@ -182,7 +183,7 @@ constexpr const char* kUsage = R"(usage:
   placedb_scale_bench --frames N [--width W] [--height H] [--queries Q] [--mapped M]
                       --query-only MAP
   placedb_scale_bench --frames N [--width W] [--height H] [--wm-max M] [--frame-times CSV]
-                      --remap MAP FIRST COUNT
+                      [--cold] --remap MAP FIRST COUNT
 
 Maps N synthetic frames (default 100000 at 320x240, wm_max 1500, windows of 5000) and prints
 one row per window: frame time p50/p99/max, tiers, RSS, file bytes per location, reopen and
@@ -194,6 +195,9 @@ query times, loop closures against the exact ground truth, and per-stage means.
                      a new session on MAP (made by this bench with the same --frames, size and
                      seed; it is changed) maps frames FIRST.. again and prints one row: what a
                      frame costs on a map that size, without making the map again
+  --cold             with --remap: MAP's pages leave the OS page cache first (fsync, then
+                     posix_fadvise DONTNEED), as those of a map larger than RAM, or idle
+                     for long, have: what the frames read of old places comes from the disk
   --set key=value    any engine setting (as placedb's --set); wm_max comes from --wm-max
 See bench/scale/README.md for the columns and the runs measured so far.
 )";
@@ -220,6 +224,10 @@ Flags parseFlags(int argc, char** argv) {
       if (f.remap_from < 0 || f.remap_count < 1)
         throw std::invalid_argument("--remap needs FIRST >= 0 and COUNT >= 1");
       i += 3;
+      continue;
+    }
+    if (flag == "--cold") {
+      f.cold = true;
       continue;
     }
     if (flag == "--show") {
@@ -402,6 +410,19 @@ std::FILE* openFrameTimes(const Flags& flags) {
   return out;
 }
 
+// --cold: every page of the map's files leaves the page cache (written back first: the kernel
+// keeps dirty pages).
+void dropFromPageCache(const fs::path& map) {
+  for (const std::string& file : placedb::storage::mapFiles(map.string())) {
+    const int fd = ::open(file.c_str(), O_RDONLY);
+    if (fd < 0) continue;
+    ::fsync(fd);
+    const int error = ::posix_fadvise(fd, 0, 0, POSIX_FADV_DONTNEED);
+    ::close(fd);
+    if (error != 0) throw std::runtime_error(file + ": posix_fadvise: " + std::strerror(error));
+  }
+}
+
 // --remap: frames of the sequence mapped again, in a new session, on a map this bench made.
 int remap(const Flags& flags, const placedb::Options& options,
           const placedb::synthetic::SyntheticSequence& seq) {
@@ -411,6 +432,7 @@ int remap(const Flags& flags, const placedb::Options& options,
     throw std::invalid_argument("--remap: frame " + std::to_string(flags.remap_from) +
                                 " is past the sequence's " + std::to_string(seq.size()));
   std::FILE* frame_times = openFrameTimes(flags);
+  if (flags.cold) dropFromPageCache(flags.map);
   auto map = placedb::Map::open(flags.map.string(), options);
   map->beginSession("scale bench remap");
   std::vector<double> times;

@@ -73,6 +73,9 @@ struct Options {
   int max_retrieved = 2;         // LTM neighbours of the hypothesis brought back per frame
   int ltm_search = 5;            // places most like the frame by place code (WM and LTM);
                                  // those in LTM come back to WM first, 0 = off
+  int read_ahead_links = 1;      // the places the next frame may bring back from LTM (and
+                                 // those this many links from them) are read on a thread into
+                                 // the OS page cache (SQLite maps), 0 = off
   int wm_immune_newest = 0;      // newest WM locations never transferred (at least)
   double wm_recent_ratio = 0.2;  // ... or this share of WM, whichever is more
 

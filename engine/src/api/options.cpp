@@ -196,6 +196,11 @@ const std::vector<Row>& table() {
       integer("ltm_search", &Options::ltm_search, 0, 1000, "0..1000",
               "places most like the frame by place code, WM and LTM; those in LTM are brought "
               "back before the filter runs, 0 = off"),
+      integer("read_ahead_links", &Options::read_ahead_links, 0, 100, "0..100",
+              "reading ahead: the places the next frame may bring back from LTM (this frame's "
+              "hypothesis and its place-code search, ranked 3 x ltm_search deep) and those this "
+              "many links from them are read on a thread of their own, so that the frame finds "
+              "them in the OS page cache (SQLite maps); 0 = off; decisions never depend on it"),
       integer("wm_immune_newest", &Options::wm_immune_newest, 0, 100000, "0..100000",
               "newest WM locations never transferred (at least)"),
       real("wm_recent_ratio", &Options::wm_recent_ratio, 0, kBelowOne, "0..1, 1 excluded",

@@ -16,6 +16,7 @@
 #include "filter/link_graph.h"
 #include "geometry/geometry.h"
 #include "map/engine_state.h"
+#include "map/read_ahead.h"
 #include "map/state_keys.h"
 #include "memory/memory_tiers.h"
 #include "memory/place_code.h"
@@ -156,6 +157,8 @@ class MapImpl final : public Map {
   void enterWorkingMemory(const std::vector<std::int64_t>& ids, FrameWrite& write);
   void leaveIndex(const WordChanges& changes);  // unreferenced words leave, imported ones stay
   void commit(FrameWrite& write, FrameResult& result, const std::string& source_path);
+  // After the commit: the places the next frame may bring back are read on another thread.
+  void readAhead(std::int64_t hypothesis);
   std::vector<FrameRef> framesOf(std::int64_t location_id) const;
 
   // Fleet maps (map_fleet.cpp): several writers of one map on a server, each in its own session.
@@ -185,6 +188,7 @@ class MapImpl final : public Map {
   void loadPlaceNeighbourhood();  // localisation: the neighbour links over the place codes
 
   std::unique_ptr<storage::MapStore> store_;
+  std::unique_ptr<ReadAhead> read_ahead_;  // started by the first frame with a hypothesis
   Mode mode_;
   std::optional<std::int64_t> frame_stamp_ns_;  // the source's stamp of the frame in flight
   Options options_;
@@ -204,6 +208,7 @@ class MapImpl final : public Map {
   std::optional<PlaceNeighbourhood> place_neighbourhood_;
   std::optional<std::vector<std::int8_t>> frame_code_;  // the current frame's, once computed
   std::vector<LocationId> searched_back_;  // brought back from LTM by this frame's code search
+  std::vector<std::int64_t> read_ahead_places_;  // this frame's code search, ranked past the cut
   KeypointCache keypoint_cache_;  // of WM locations the geometric check compared frames with
   EngineCounters counters_;
   VocabularyStateWriter vocabulary_state_;

@@ -320,6 +320,7 @@ SessionInfo MapImpl::resumeSession(std::int64_t session_id) {
 }
 
 void MapImpl::close() {
+  read_ahead_.reset();
   if (closed_ || !session_id_ || broken_) {
     closed_ = true;
     return;

@@ -124,6 +124,7 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
   tiers_->beginFrame();
   frame_code_.reset();
   searched_back_.clear();
+  read_ahead_places_.clear();
   FrameResult r;
   FrameWrite w;
   r.frame_id = counters_.next_frame_id++;
@@ -162,6 +163,7 @@ FrameResult MapImpl::processFeatures(const Features& features, std::int64_t sour
   r.times = times;
   if (hypothesis != kNewPlace) w.frames_of = hypothesis;
   commit(w, r, source_path);
+  readAhead(hypothesis);
   return r;
 }
 
@@ -368,12 +370,19 @@ void MapImpl::searchLongTermMemory(const Features& features, FrameWrite& write,
   // The places most like this frame among WM and LTM; those in LTM come back before the
   // likelihood, so the filter and the check see them in this very frame.
   const auto code = frameCode(features);
-  const auto matches = places_.search(
-      code, static_cast<std::size_t>(options_.ltm_search),
-      [this](LocationId id) { return tiers_->contains(id) && tiers_->tierOf(id) != Tier::kStm; });
+  const auto wanted = static_cast<std::size_t>(options_.ltm_search);
+  // Reading ahead, the search ranks twice as many again: the places just below the cut are the
+  // likeliest to make it at the next frame. The first ltm_search are the same either way.
+  const std::size_t ranked = options_.read_ahead_links > 0 ? 3 * wanted : wanted;
+  const auto matches = places_.search(code, ranked, [this](LocationId id) {
+    return tiers_->contains(id) && tiers_->tierOf(id) != Tier::kStm;
+  });
   std::vector<std::int64_t> ids;
-  for (const PlaceMatch& m : matches)
-    if (tiers_->tierOf(m.location) == Tier::kLtm) ids.push_back(m.location);
+  for (std::size_t i = 0; i < matches.size(); ++i) {
+    read_ahead_places_.push_back(matches[i].location);
+    if (i < wanted && tiers_->tierOf(matches[i].location) == Tier::kLtm)
+      ids.push_back(matches[i].location);
+  }
   bringBack(ids, write, result);
   result.retrieved_by_search = ids.size();
   searched_back_ = std::move(ids);  // loop candidates of this frame (candidate_choice.h)
@@ -546,6 +555,24 @@ void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_pa
   r.times.storage = msSince(stage);
   r.times.total = r.times.features + r.times.quantisation + r.times.likelihood + r.times.filter +
                   r.times.memory + r.times.storage;
+}
+
+void MapImpl::readAhead(std::int64_t hypothesis) {
+  if (options_.read_ahead_links <= 0 || storage::isServerMap(store_->path())) {
+    read_ahead_.reset();
+    return;
+  }
+  // The hypothesis first: the next frame brings back its LTM neighbours.
+  std::vector<std::int64_t> places;
+  if (hypothesis != kNewPlace) places.push_back(hypothesis);
+  places.insert(places.end(), read_ahead_places_.begin(), read_ahead_places_.end());
+  if (places.empty()) return;
+  if (!read_ahead_) {
+    ReadAheadSettings settings;
+    settings.links = options_.read_ahead_links;
+    read_ahead_ = std::make_unique<ReadAhead>(store_->path(), settings);
+  }
+  read_ahead_->ahead(std::move(places));
 }
 
 std::vector<FrameRef> MapImpl::framesOf(std::int64_t location_id) const {

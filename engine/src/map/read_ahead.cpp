@@ -1,0 +1,140 @@
+#include "map/read_ahead.h"
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <deque>
+#include <set>
+#include <utility>
+
+#include "placedb/storage/map_store.h"
+
+namespace placedb {
+
+ReadAhead::ReadAhead(std::string map_path, ReadAheadSettings settings)
+    : path_(std::move(map_path)), settings_(settings), thread_([this] { run(); }) {}
+
+ReadAhead::~ReadAhead() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  wake_.notify_all();
+  thread_.join();
+}
+
+void ReadAhead::ahead(std::vector<std::int64_t> places) {
+  if (places.empty()) return;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (stopped_) return;
+    pending_ = std::move(places);
+  }
+  wake_.notify_one();
+}
+
+void ReadAhead::waitIdle() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  idle_.wait(lock, [this] { return stopped_ || (!pending_ && !busy_); });
+}
+
+std::size_t ReadAhead::placesRead() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return places_read_;
+}
+
+bool ReadAhead::stopped() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return stopped_;
+}
+
+void ReadAhead::run() {
+  // The frame's own threads come first: this one only uses a core they leave idle. (Linux
+  // gives each thread a nice value of its own; where it cannot be set, the default stays.)
+  const auto self = static_cast<id_t>(::gettid());
+  ::setpriority(PRIO_PROCESS, self, std::min(19, ::getpriority(PRIO_PROCESS, self) + 10));
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (true) {
+    wake_.wait(lock, [this] { return stopping_ || pending_; });
+    if (stopping_) break;
+    const std::vector<std::int64_t> places = std::move(*pending_);
+    pending_.reset();
+    busy_ = true;
+    lock.unlock();
+    bool failed = false;
+    try {
+      read(places);
+    } catch (...) {
+      // A map it cannot read (moved, locked, damaged): the frames read their rows themselves.
+      failed = true;
+    }
+    lock.lock();
+    busy_ = false;
+    if (failed) {
+      stopped_ = true;
+      pending_.reset();
+      reader_.reset();
+    }
+    idle_.notify_all();
+    if (failed) break;
+  }
+  stopped_ = true;
+  idle_.notify_all();
+}
+
+std::vector<std::int64_t> ReadAhead::neighbourhood(const std::vector<std::int64_t>& places) {
+  // Breadth first over the stored links of every type (a revisit's stretch is joined to the
+  // earlier visits by loop closures): the places asked, then one link on, and so on.
+  std::vector<std::int64_t> order;
+  std::set<std::int64_t> seen;
+  std::deque<std::pair<std::int64_t, int>> queue;
+  for (std::int64_t id : places) {
+    if (order.size() >= settings_.max_places) return order;
+    if (!seen.insert(id).second) continue;
+    order.push_back(id);
+    queue.emplace_back(id, 0);
+  }
+  while (!queue.empty() && order.size() < settings_.max_places) {
+    const auto [id, depth] = queue.front();
+    queue.pop_front();
+    if (depth >= settings_.links) continue;
+    for (const storage::LinkRecord& l : reader_->links(id)) {
+      const std::int64_t other = l.location_a == id ? l.location_b : l.location_a;
+      if (!seen.insert(other).second) continue;
+      order.push_back(other);
+      queue.emplace_back(other, depth + 1);
+      if (order.size() >= settings_.max_places) break;
+    }
+  }
+  return order;
+}
+
+void ReadAhead::read(const std::vector<std::int64_t>& places) {
+  if (!reader_) reader_ = storage::openMapStore(path_, storage::OpenMode::kReadOnly);
+  const auto now = std::chrono::steady_clock::now();
+  const auto fresh = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(settings_.reread_after_s));
+  storage::ReadSnapshot snapshot = reader_->readSnapshot();
+  std::vector<std::int64_t> ids;
+  for (std::int64_t id : neighbourhood(places)) {
+    auto at = read_at_.find(id);
+    if (at != read_at_.end() && now - at->second < fresh) continue;
+    read_at_[id] = now;
+    ids.push_back(id);
+  }
+  if (read_at_.size() > 64 * settings_.max_places) {
+    for (auto it = read_at_.begin(); it != read_at_.end();)
+      it = now - it->second < fresh ? std::next(it) : read_at_.erase(it);
+  }
+  if (ids.empty()) return;
+  // What bringing a place back reads (MapImpl::bringBack: its word ids, its words' descriptors,
+  // its links); the results are dropped, the pages stay cached.
+  reader_->loadWordIds(ids);
+  reader_->locationWordDescriptors(ids);
+  for (std::int64_t id : ids) reader_->links(id);
+  std::lock_guard<std::mutex> lock(mutex_);
+  places_read_ += ids.size();
+}
+
+}  // namespace placedb
