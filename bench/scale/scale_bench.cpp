@@ -22,6 +22,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -415,7 +416,8 @@ std::FILE* openFrameTimes(const Flags& flags) {
 void dropFromPageCache(const fs::path& map) {
   for (const std::string& file : placedb::storage::mapFiles(map.string())) {
     const int fd = ::open(file.c_str(), O_RDONLY);
-    if (fd < 0) continue;
+    if (fd < 0 && errno == ENOENT) continue;  // a side file the map does not have now
+    if (fd < 0) throw std::runtime_error(file + ": " + std::strerror(errno));
     ::fsync(fd);
     const int error = ::posix_fadvise(fd, 0, 0, POSIX_FADV_DONTNEED);
     ::close(fd);

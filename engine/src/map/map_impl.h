@@ -188,7 +188,7 @@ class MapImpl final : public Map {
   void loadPlaceNeighbourhood();  // localisation: the neighbour links over the place codes
 
   std::unique_ptr<storage::MapStore> store_;
-  std::unique_ptr<ReadAhead> read_ahead_;  // started by the first frame with a hypothesis
+  std::unique_ptr<ReadAhead> read_ahead_;  // started by the first frame with places to read
   Mode mode_;
   std::optional<std::int64_t> frame_stamp_ns_;  // the source's stamp of the frame in flight
   Options options_;
@@ -208,7 +208,7 @@ class MapImpl final : public Map {
   std::optional<PlaceNeighbourhood> place_neighbourhood_;
   std::optional<std::vector<std::int8_t>> frame_code_;  // the current frame's, once computed
   std::vector<LocationId> searched_back_;  // brought back from LTM by this frame's code search
-  std::vector<std::int64_t> read_ahead_places_;  // this frame's code search, ranked past the cut
+  std::vector<std::int64_t> read_ahead_places_;  // all this frame's code search ranked, in order
   KeypointCache keypoint_cache_;  // of WM locations the geometric check compared frames with
   EngineCounters counters_;
   VocabularyStateWriter vocabulary_state_;

@@ -379,7 +379,7 @@ void MapImpl::searchLongTermMemory(const Features& features, FrameWrite& write,
   });
   std::vector<std::int64_t> ids;
   for (std::size_t i = 0; i < matches.size(); ++i) {
-    read_ahead_places_.push_back(matches[i].location);
+    if (ranked > wanted) read_ahead_places_.push_back(matches[i].location);
     if (i < wanted && tiers_->tierOf(matches[i].location) == Tier::kLtm)
       ids.push_back(matches[i].location);
   }

@@ -4,7 +4,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <deque>
 #include <set>
 #include <utility>
 
@@ -83,27 +82,24 @@ void ReadAhead::run() {
   idle_.notify_all();
 }
 
-std::vector<std::int64_t> ReadAhead::neighbourhood(const std::vector<std::int64_t>& places) {
+std::vector<ReadAhead::Reached> ReadAhead::neighbourhood(const std::vector<std::int64_t>& places) {
   // Breadth first over the stored links of every type (a revisit's stretch is joined to the
   // earlier visits by loop closures): the places asked, then one link on, and so on.
-  std::vector<std::int64_t> order;
+  std::vector<Reached> order;
   std::set<std::int64_t> seen;
-  std::deque<std::pair<std::int64_t, int>> queue;
   for (std::int64_t id : places) {
     if (order.size() >= settings_.max_places) return order;
-    if (!seen.insert(id).second) continue;
-    order.push_back(id);
-    queue.emplace_back(id, 0);
+    if (seen.insert(id).second) order.push_back({id, 0, false});
   }
-  while (!queue.empty() && order.size() < settings_.max_places) {
-    const auto [id, depth] = queue.front();
-    queue.pop_front();
-    if (depth >= settings_.links) continue;
+  for (std::size_t next = 0; next < order.size() && order.size() < settings_.max_places; ++next) {
+    if (order[next].depth >= settings_.links) break;  // breadth first: the rest are as deep
+    const std::int64_t id = order[next].id;
+    const int depth = order[next].depth;
+    order[next].links_read = true;
     for (const storage::LinkRecord& l : reader_->links(id)) {
       const std::int64_t other = l.location_a == id ? l.location_b : l.location_a;
       if (!seen.insert(other).second) continue;
-      order.push_back(other);
-      queue.emplace_back(other, depth + 1);
+      order.push_back({other, depth + 1, false});
       if (order.size() >= settings_.max_places) break;
     }
   }
@@ -117,22 +113,25 @@ void ReadAhead::read(const std::vector<std::int64_t>& places) {
       std::chrono::duration<double>(settings_.reread_after_s));
   storage::ReadSnapshot snapshot = reader_->readSnapshot();
   std::vector<std::int64_t> ids;
-  for (std::int64_t id : neighbourhood(places)) {
-    auto at = read_at_.find(id);
+  for (const Reached& place : neighbourhood(places)) {
+    auto at = read_at_.find(place.id);
     if (at != read_at_.end() && now - at->second < fresh) continue;
-    read_at_[id] = now;
-    ids.push_back(id);
+    read_at_[place.id] = now;
+    ids.push_back(place.id);
+    // Bringing a place back reads its links too; the walk above read those of the places it
+    // went on from.
+    if (!place.links_read) reader_->links(place.id);
   }
+  // Forget places read too long ago once there are many: the map's size never grows this.
   if (read_at_.size() > 64 * settings_.max_places) {
     for (auto it = read_at_.begin(); it != read_at_.end();)
       it = now - it->second < fresh ? std::next(it) : read_at_.erase(it);
   }
   if (ids.empty()) return;
-  // What bringing a place back reads (MapImpl::bringBack: its word ids, its words' descriptors,
-  // its links); the results are dropped, the pages stay cached.
+  // The rest of what bringing a place back reads (MapImpl::bringBack: its word ids and its
+  // words' descriptors); the results are dropped, the pages stay cached.
   reader_->loadWordIds(ids);
   reader_->locationWordDescriptors(ids);
-  for (std::int64_t id : ids) reader_->links(id);
   std::lock_guard<std::mutex> lock(mutex_);
   places_read_ += ids.size();
 }

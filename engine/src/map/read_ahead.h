@@ -54,8 +54,13 @@ class ReadAhead {
 
  private:
   void run();
+  struct Reached {
+    std::int64_t id;
+    int depth;        // links from the nearest place asked
+    bool links_read;  // the walk read its links to go on from it
+  };
   void read(const std::vector<std::int64_t>& places);
-  std::vector<std::int64_t> neighbourhood(const std::vector<std::int64_t>& places);
+  std::vector<Reached> neighbourhood(const std::vector<std::int64_t>& places);
 
   const std::string path_;
   const ReadAheadSettings settings_;
