@@ -3,9 +3,11 @@
 // leaves every decision as it was and lets the writer's close remove the log.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <filesystem>
 #include <map>
 #include <set>
+#include <thread>
 
 #include "engine_fixture.h"
 #include "file_bytes.h"
@@ -78,6 +80,28 @@ TEST_F(ReadAheadTest, ReadsThePlacesWithinItsLinksOnce) {
     EXPECT_EQ(ahead.placesRead(), expected);
   }
   EXPECT_EQ(readBytes(path_), before) << "reading ahead only reads";
+}
+
+TEST_F(ReadAheadTest, ForgetsThePlacesItReadLongAgo) {
+  // What it remembers is what it read lately, not every place a long session ever read.
+  mapFrames(30, smallMemory(0));
+  const std::int64_t locations = sqlCount(path_, "SELECT count(*) FROM locations");
+  ASSERT_GE(locations, 4);
+  ReadAheadSettings settings;
+  settings.links = 0;
+  settings.reread_after_s = 0.05;
+  ReadAhead ahead(path_.string(), settings);
+  ahead.ahead({1, 2});
+  ahead.waitIdle();
+  EXPECT_EQ(ahead.placesRemembered(), 2u);
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  ahead.ahead({3});
+  ahead.waitIdle();
+  EXPECT_EQ(ahead.placesRemembered(), 1u) << "places 1 and 2 were read over 0.05 s ago";
+  ahead.ahead({1});  // forgotten, so read again
+  ahead.waitIdle();
+  EXPECT_EQ(ahead.placesRead(), 4u);
+  EXPECT_FALSE(ahead.stopped());
 }
 
 TEST_F(ReadAheadTest, StopsQuietlyOnAMapItCannotRead) {

@@ -43,6 +43,11 @@ std::size_t ReadAhead::placesRead() const {
   return places_read_;
 }
 
+std::size_t ReadAhead::placesRemembered() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return places_remembered_;
+}
+
 bool ReadAhead::stopped() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return stopped_;
@@ -117,23 +122,27 @@ void ReadAhead::read(const std::vector<std::int64_t>& places) {
     auto at = read_at_.find(place.id);
     if (at != read_at_.end() && now - at->second < fresh) continue;
     read_at_[place.id] = now;
+    reads_.emplace_back(now, place.id);
     ids.push_back(place.id);
     // Bringing a place back reads its links too; the walk above read those of the places it
     // went on from.
     if (!place.links_read) reader_->links(place.id);
   }
-  // Forget places read too long ago once there are many: the map's size never grows this.
-  if (read_at_.size() > 64 * settings_.max_places) {
-    for (auto it = read_at_.begin(); it != read_at_.end();)
-      it = now - it->second < fresh ? std::next(it) : read_at_.erase(it);
+  // Forget the places read too long ago; one read again since keeps its newer time.
+  while (!reads_.empty() && now - reads_.front().first >= fresh) {
+    const auto [at, id] = reads_.front();
+    reads_.pop_front();
+    if (auto it = read_at_.find(id); it != read_at_.end() && it->second == at) read_at_.erase(it);
   }
-  if (ids.empty()) return;
   // The rest of what bringing a place back reads (MapImpl::bringBack: its word ids and its
   // words' descriptors); the results are dropped, the pages stay cached.
-  reader_->loadWordIds(ids);
-  reader_->locationWordDescriptors(ids);
+  if (!ids.empty()) {
+    reader_->loadWordIds(ids);
+    reader_->locationWordDescriptors(ids);
+  }
   std::lock_guard<std::mutex> lock(mutex_);
   places_read_ += ids.size();
+  places_remembered_ = read_at_.size();
 }
 
 }  // namespace placedb

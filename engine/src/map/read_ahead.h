@@ -14,6 +14,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -48,8 +49,10 @@ class ReadAhead {
   // Waits until no request is pending or under way.
   void waitIdle();
 
-  // What it has done so far: places read, and whether an error stopped it.
+  // What it has done so far: places read, places it remembers reading (those read within
+  // settings.reread_after_s as of its last request), and whether an error stopped it.
   std::size_t placesRead() const;
+  std::size_t placesRemembered() const;
   bool stopped() const;
 
  private:
@@ -65,7 +68,10 @@ class ReadAhead {
   const std::string path_;
   const ReadAheadSettings settings_;
   std::unique_ptr<storage::MapStore> reader_;  // the thread's own connection
+  // When each place was last read, and the reads oldest first: forgetting the places read too
+  // long ago pops the front of the queue, never walks every place remembered.
   std::unordered_map<std::int64_t, std::chrono::steady_clock::time_point> read_at_;
+  std::deque<std::pair<std::chrono::steady_clock::time_point, std::int64_t>> reads_;
 
   mutable std::mutex mutex_;
   std::condition_variable wake_;
@@ -75,6 +81,7 @@ class ReadAhead {
   bool stopping_ = false;
   bool stopped_ = false;
   std::size_t places_read_ = 0;
+  std::size_t places_remembered_ = 0;
   std::thread thread_;
 };
 
