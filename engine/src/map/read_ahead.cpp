@@ -7,6 +7,7 @@
 #include <set>
 #include <utility>
 
+#include "map/state_keys.h"
 #include "placedb/storage/map_store.h"
 
 namespace placedb {
@@ -135,10 +136,13 @@ void ReadAhead::read(const std::vector<std::int64_t>& places) {
     if (auto it = read_at_.find(id); it != read_at_.end() && it->second == at) read_at_.erase(it);
   }
   // The rest of what bringing a place back reads (MapImpl::bringBack: its word ids and its
-  // words' descriptors); the results are dropped, the pages stay cached.
+  // words' descriptors), and what checking it as a loop candidate reads beside its word
+  // references (MapImpl::loadKeypoints: its keypoints' descriptors, a blob of their own); the
+  // results are dropped, the pages stay cached.
   if (!ids.empty()) {
     reader_->loadWordIds(ids);
     reader_->locationWordDescriptors(ids);
+    for (std::int64_t id : ids) reader_->getState(keypointDescriptorsKey(id));
   }
   std::lock_guard<std::mutex> lock(mutex_);
   places_read_ += ids.size();

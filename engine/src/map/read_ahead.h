@@ -1,7 +1,8 @@
 #pragma once
 // Reads ahead of the frames. A revisit walks along a stretch of the map, and the next frame
 // brings back from long-term memory the places most like it (the place-code search) and those
-// linked to its hypothesis: it reads their signatures and word descriptors. When those rows have
+// linked to its hypothesis: it reads their signatures and word descriptors, and the check reads
+// the keypoints of those the search found, loop candidates in that frame. When those rows have
 // left the OS page cache (a map larger than RAM, or a kernel that pages out idle file pages),
 // each retrieval waits for the disk inside the frame. The next frame's places are, most often,
 // this frame's: those its search ranked just below the ones it brought back, and the places one
