@@ -190,7 +190,9 @@ TEST(InvertedIndex, WordsLeaveAndComeBackAsLocationsMoveBetweenTiers) {
     for (const auto& [word, count] : refs) ASSERT_EQ(index.referenceCount(word), count) << word;
     for (const auto& [id, signature] : away)
       for (const auto& e : signature.entries())
-        if (!refs.count(e.word)) ASSERT_FALSE(index.isReferenced(e.word)) << e.word;
+        if (!refs.count(e.word)) {
+          ASSERT_FALSE(index.isReferenced(e.word)) << e.word;
+        }
   }
 }
 
