@@ -117,7 +117,8 @@ struct Options {
   int temporal_max_gap = 4;             // frames since that closure (1 = the previous frame's)
 
   // --- running ---
-  // Worker threads of feature extraction, quantisation and the place-code scan, 0 = one per
+  // Worker threads of feature extraction, quantisation, the place-code scan and the geometric
+  // checks of a frame's candidates (two at a time once the first has failed), 0 = one per
   // hardware thread. The work is split so that results never depend on it: any value gives the
   // same decisions. The threads beside the caller's start on first use and stay for the life of
   // the process, shared by every map in it (a forked child starts its own).

@@ -177,8 +177,8 @@ const std::vector<Row>& table() {
       integer("kd_checks", &Options::kd_checks, 1, 1 << 20, "1..1048576",
               "kd-tree leaves checked per query (recall vs time)"),
       integer("threads", &Options::threads, 0, 64, "0..64",
-              "worker threads of feature extraction, quantisation and the place-code scan, 0 = "
-              "one per hardware thread; decisions never depend on it"),
+              "worker threads of feature extraction, quantisation, the place-code scan and the "
+              "candidates' checks, 0 = one per hardware thread; decisions never depend on it"),
       integer("stm_size", &Options::stm_size, 1, 10000, "1..10000",
               "short-term memory: newest locations, never loop candidates"),
       real("t_sim", &Options::t_sim, 0, 1, "0..1",

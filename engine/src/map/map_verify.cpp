@@ -10,8 +10,10 @@
 
 #include "decision/candidate_choice.h"
 #include "decision/closure_evidence.h"
+#include "features/feature_options.h"
 #include "map/map_impl.h"
 #include "map/option_mapping.h"
+#include "map/paired_checks.h"
 
 namespace placedb {
 namespace {
@@ -214,13 +216,20 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   query.codes = std::make_shared<const DescriptorCodes>(
       quantiseDescriptors(features.descriptors, kQueryCodeLevels));
   std::map<LocationId, GeometricResult> checked_continuing;
-  const CandidateChoice choice = chooseCandidate(
-      candidates, near, geometry.rule,
-      [&](LocationId c) -> std::optional<GeometricResult> {
+  PairedChecks checks(
+      candidates, resolveThreadCount(options_.threads),
+      [this](LocationId c) -> std::optional<GeometricView> {
         const CachedKeypoints& keypoints = keypointsOf(c);
         if (keypoints.points.empty()) return std::nullopt;
-        GeometricResult g = checkGeometry(query, viewOf(keypoints), geometry);
-        if (std::binary_search(continuing.begin(), continuing.end(), c)) checked_continuing[c] = g;
+        return viewOf(keypoints);
+      },
+      [&](const GeometricView& view) { return checkGeometry(query, view, geometry); });
+  const CandidateChoice choice = chooseCandidate(
+      candidates, near, geometry.rule,
+      [&](LocationId c) {
+        std::optional<GeometricResult> g = checks(c);
+        if (g && std::binary_search(continuing.begin(), continuing.end(), c))
+          checked_continuing[c] = *g;
         return g;
       },
       [this](const GeometricResult& g) { return passesNearLastClosure(g); });

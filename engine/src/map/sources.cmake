@@ -8,5 +8,6 @@ set(_placedb_map_sources
   ${CMAKE_CURRENT_LIST_DIR}/map_process.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_query.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_verify.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/paired_checks.cpp
   ${CMAKE_CURRENT_LIST_DIR}/read_ahead.cpp)
 target_sources(placedb_engine PRIVATE ${_placedb_map_sources})
