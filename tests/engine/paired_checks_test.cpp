@@ -111,6 +111,21 @@ TEST(PairedChecksTest, AReadThatFailsAheadFailsOnlyWhenAskedFor) {
   EXPECT_THROW(checks(6), Error) << "asked for, it fails as it would one by one";
 }
 
+TEST(PairedChecksTest, AFailureOfTheWholeMapGoesUpAtOnce) {
+  std::vector<LocationId> prepared;
+  RecordingCheck check;
+  const PairedChecks::Prepare views = viewsOf({}, &prepared);
+  PairedChecks checks(
+      {3, 1, 6}, 2,
+      [&](LocationId c) -> std::optional<GeometricView> {
+        if (c == 6) throw Error(ErrorCode::kServerLost, "the map's server went away");
+        return views(c);
+      },
+      check.fn());
+  ASSERT_TRUE(checks(3));
+  EXPECT_THROW(checks(1), Error);
+}
+
 // lip6_outdoor_120x96: few features, so many frames check candidate after candidate.
 TEST(PairedChecksTest, AMapDecidesAsOnOneThread) {
   const auto dir = dataset("lip6_outdoor_120x96");

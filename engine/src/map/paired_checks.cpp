@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "features/parallel_for.h"
+#include "placedb/error.h"
 
 namespace placedb {
 
@@ -31,14 +32,16 @@ std::optional<GeometricResult> PairedChecks::operator()(LocationId candidate) {
   // checked, and a check made beside it would only have been waited for.
   const std::optional<LocationId> next =
       first || threads_ < 2 ? std::nullopt : nextAfter(candidate);
-  // What fails ahead (a damaged row, say) is not kept: the candidate is read and checked again,
-  // and fails the frame, only if chooseCandidate asks for it, as one by one.
+  // A damaged row read ahead is not kept: the candidate is read and checked again, and fails the
+  // frame, only if chooseCandidate asks for it, as one by one. Any other failure is the map's
+  // as a whole (a lost server, the disk), which the frame meets anyway: it goes on up at once.
   std::optional<GeometricView> next_view;
   if (next) {
     try {
       next_view = prepare_(*next);
       if (!next_view) ahead_.emplace(*next, std::nullopt);
-    } catch (...) {
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::kMapRefused) throw;
       next_view.reset();
     }
   }
