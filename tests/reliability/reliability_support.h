@@ -42,7 +42,7 @@ inline std::string integrityCheck(const std::filesystem::path& map) {
     return "open failed: " + message;
   }
   std::string report;
-  sqlite3_exec(
+  const int rc = sqlite3_exec(
       db, "PRAGMA integrity_check",
       [](void* out, int, char** values, char**) {
         auto& text = *static_cast<std::string*>(out);
@@ -50,6 +50,10 @@ inline std::string integrityCheck(const std::filesystem::path& map) {
         return 0;
       },
       &report, nullptr);
+  // A check that could not run says why (a kill at start-up once left one that returned nothing).
+  if (rc != SQLITE_OK)
+    report += (report.empty() ? "" : "; ") + std::string("check failed: ") + sqlite3_errmsg(db) +
+              " (extended code " + std::to_string(sqlite3_extended_errcode(db)) + ")";
   sqlite3_close(db);
   return report;
 }
