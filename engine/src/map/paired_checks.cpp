@@ -42,7 +42,6 @@ std::optional<GeometricResult> PairedChecks::operator()(LocationId candidate) {
       if (!next_view) ahead_.emplace(*next, std::nullopt);
     } catch (const Error& e) {
       if (e.code() != ErrorCode::kMapRefused) throw;
-      next_view.reset();
     }
   }
   if (!next_view) return check_(*view);

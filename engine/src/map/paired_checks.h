@@ -2,8 +2,8 @@
 // Geometric checks of a frame's loop candidates, two at a time. chooseCandidate
 // (decision/candidate_choice.h) asks for candidates one by one, most likely first, and stops at
 // the first that passes. A frame whose first candidate passes checks one; a frame whose first
-// fails most often goes on to check every candidate (the frames a revisit's place-code search
-// brings five places back for check a dozen), and those checks are most of the slowest frames'
+// fails most often goes on to check every candidate (the place-code search's, the filter's
+// neighbours, those near the last closure), and those checks are most of the slowest frames'
 // cost. So from the second candidate on, the next candidate in order is checked on another core
 // while the one asked for is checked on this one, and its result waits for chooseCandidate to ask.
 // Each check is a pure function of the two views (checkGeometry draws its own fixed-seed
