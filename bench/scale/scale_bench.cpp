@@ -183,8 +183,8 @@ constexpr const char* kUsage = R"(usage:
   placedb_scale_bench --frames N [--seed S] [--width W] [--height H] --show Q R PNG
   placedb_scale_bench --frames N [--width W] [--height H] [--queries Q] [--mapped M]
                       --query-only MAP
-  placedb_scale_bench --frames N [--width W] [--height H] [--wm-max M] [--frame-times CSV]
-                      [--cold] --remap MAP FIRST COUNT
+  placedb_scale_bench --frames N [--seed S] [--width W] [--height H] [--wm-max M]
+                      [--frame-times CSV] [--cold] --remap MAP FIRST COUNT
 
 Maps N synthetic frames (default 100000 at 320x240, wm_max 1500, windows of 5000) and prints
 one row per window: frame time p50/p99/max, tiers, RSS, file bytes per location, reopen and
@@ -195,7 +195,8 @@ query times, loop closures against the exact ground truth, and per-stage means.
   --remap MAP FIRST COUNT
                      a new session on MAP (made by this bench with the same --frames, size and
                      seed; it is changed) maps frames FIRST.. again and prints one row: what a
-                     frame costs on a map that size, without making the map again
+                     frame costs on a map that size, without making the map again. With another
+                     --seed the frames are places MAP never saw (bench/scale/same_frames.py)
   --cold             with --remap: MAP's pages leave the OS page cache first (fsync, then
                      posix_fadvise DONTNEED), as those of a map larger than RAM, or idle
                      for long, have: what the frames read of old places comes from the disk
