@@ -28,13 +28,10 @@ import subprocess
 import sys
 import tempfile
 
+from p99_frames import percentile
+
 STAGES = ['features', 'quantisation', 'filter', 'verification', 'memory', 'storage']
 LABELS = ['feat', 'quant', 'filt', 'verif', 'mem', 'stor']
-
-
-def percentile(values, p):
-    ordered = sorted(values)
-    return ordered[min(len(ordered) - 1, round(p / 100 * (len(ordered) - 1)))]
 
 
 def mean(values):
@@ -126,8 +123,7 @@ def main():
             if l is None:
                 continue
             extra = int(l['retrieved']) - int(s['retrieved'])
-            group = groups.setdefault(extra, {'n': 0, 'ms': [], **{st: [] for st in STAGES}})
-            group['n'] += 1
+            group = groups.setdefault(extra, {'ms': [], **{st: [] for st in STAGES}})
             group['ms'].append(float(l['ms']) - float(s['ms']))
             for stage in STAGES:
                 group[stage].append(float(l[stage]) - float(s[stage]))
@@ -137,7 +133,7 @@ def main():
     for extra in sorted(groups):
         g = groups[extra]
         stages = '  '.join(f'{mean(g[stage]):+5.2f}' for stage in STAGES)
-        print(f'{extra:+5d}  {g["n"]:6d}  {mean(g["ms"]):+6.2f}  {stages}')
+        print(f'{extra:+5d}  {len(g["ms"]):6d}  {mean(g["ms"]):+6.2f}  {stages}')
 
 
 if __name__ == '__main__':

@@ -50,7 +50,7 @@ inline std::string integrityCheck(const std::filesystem::path& map) {
         return 0;
       },
       &report, nullptr);
-  // A check that could not run says why (a kill at start-up once left one that returned nothing).
+  // A check that could not run says why, rather than an empty report that reads as no finding.
   if (rc != SQLITE_OK)
     report += (report.empty() ? "" : "; ") + std::string("check failed: ") + sqlite3_errmsg(db) +
               " (extended code " + std::to_string(sqlite3_extended_errcode(db)) + ")";
