@@ -16,6 +16,13 @@
 //
 // Usage: placedb_walk_sequence OUT [--frames N] [--width W] [--height H] [--speed M]
 //                              [--seed S] [--hfov DEG] [--pitch DEG] [--camera-height M]
+//                              [--profile demo|single_pass] [--lookalike none|poster|corridor]
+//                              [--lookalike-gap FRAMES] [--lookalike-pitch M]
+//                              [--ground-contrast C]
+//
+// With --profile single_pass the walk never comes back (gt_pairs.txt is empty) and a lookalike
+// (synthetic/lookalikes.h) puts one object at two places or a motif along a corridor: the
+// negative checks of bench/quality/precision.py, where every accepted closure is false.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -38,7 +45,11 @@ using placedb::synthetic::SyntheticSequence;
 int usage() {
   std::fputs(
       "usage: placedb_walk_sequence OUT [--frames N] [--width W] [--height H] [--speed M]\n"
-      "                             [--seed S] [--hfov DEG] [--pitch DEG] [--camera-height M]\n",
+      "                             [--seed S] [--hfov DEG] [--pitch DEG] [--camera-height M]\n"
+      "                             [--profile demo|single_pass] [--lookalike "
+      "none|poster|corridor]\n"
+      "                             [--lookalike-gap FRAMES] [--lookalike-pitch M]\n"
+      "                             [--ground-contrast C]\n",
       stderr);
   return 2;
 }
@@ -96,6 +107,16 @@ int main(int argc, char** argv) {
       options.pitch_degrees = std::atof(value);
     } else if (key == "--camera-height") {
       options.camera_height = std::atof(value);
+    } else if (key == "--profile") {
+      options.profile = value;
+    } else if (key == "--lookalike") {
+      options.lookalike = value;
+    } else if (key == "--lookalike-gap") {
+      options.lookalike_gap = std::atoi(value);
+    } else if (key == "--lookalike-pitch") {
+      options.lookalike_pitch = std::atof(value);
+    } else if (key == "--ground-contrast") {
+      options.ground_contrast = std::atof(value);
     } else {
       return usage();
     }

@@ -35,8 +35,8 @@ void require(bool ok, const std::string& what) {
 }
 
 SyntheticOptions withProfileDefaults(SyntheticOptions o) {
-  require(o.profile == "demo" || o.profile == "scale",
-          "profile must be \"demo\" or \"scale\", not \"" + o.profile + "\"");
+  require(o.profile == "demo" || o.profile == "scale" || o.profile == "single_pass",
+          "profile must be \"demo\", \"scale\" or \"single_pass\", not \"" + o.profile + "\"");
   const bool scale = o.profile == "scale";
   if (o.revisit_fraction < 0) o.revisit_fraction = scale ? 0.25 : 0.4;
   if (o.first_revisit_fraction < 0) o.first_revisit_fraction = scale ? 0.1 : 0.35;
@@ -66,6 +66,9 @@ void validate(const SyntheticOptions& o, const CameraIntrinsics& camera) {
   require(top_ray >= 10 && o.pitch_degrees + o.pitch_wander_degrees <= 90,
           "pitch_degrees too shallow for the field of view: the image would see the horizon");
   require(o.noise_sigma >= 0 && o.lateral_wander >= 0, "wander and noise must not be negative");
+  require(o.lookalike_gap >= 1 && o.lookalike_pitch > 0,
+          "lookalike gap and pitch must be positive");
+  require(o.ground_contrast >= 0 && o.ground_contrast <= 1, "ground_contrast must be in [0, 1]");
 }
 
 std::vector<Pose> planPoses(const SyntheticOptions& o, int attempt) {
@@ -84,9 +87,13 @@ std::vector<Pose> planPoses(const SyntheticOptions& o, int attempt) {
   route.explore_chunk_edges[0] = scale ? 4 : 1;
   route.explore_chunk_edges[1] = scale ? 12 : 2;
   route.nearest_of = scale ? 3 : 6;
-  const std::vector<cv::Point> walk = planStreetWalk(route);
-  const std::vector<PathSample> path =
-      samplePath(walk, route.block, route.turn_radius, o.speed, o.frames);
+  std::vector<PathSample> path;
+  if (o.profile == "single_pass") {
+    for (int i = 0; i < o.frames; ++i) path.push_back({i * o.speed, 0.0, 0.0});
+  } else {
+    const std::vector<cv::Point> walk = planStreetWalk(route);
+    path = samplePath(walk, route.block, route.turn_radius, o.speed, o.frames);
+  }
 
   std::vector<Pose> poses(o.frames);
   for (int i = 0; i < o.frames; ++i) {
@@ -150,7 +157,7 @@ SyntheticSequence::SyntheticSequence(const SyntheticOptions& options)
   validate(o, camera_);
   // Short routes have few streets, so the share of repeated frames comes out coarse; try a few
   // route variants (still a pure function of the seed) and keep the one closest to the plan.
-  const int attempts = o.frames <= 5000 ? 6 : 1;
+  const int attempts = o.frames <= 5000 && o.profile != "single_pass" ? 6 : 1;
   double best_score = 1e300;
   for (int attempt = 0; attempt < attempts; ++attempt) {
     std::vector<Pose> poses = planPoses(o, attempt);
@@ -171,6 +178,7 @@ SyntheticSequence::SyntheticSequence(const SyntheticOptions& options)
   for (int q = 0; q < o.frames; ++q) first_pair_[q + 1] += first_pair_[q];
 
   texture_ = std::make_unique<GroundTexture>(hashOf(o.seed, kWorldSalt), o.tile_cache);
+  decals_ = placeLookalikes(o, poses_);
   ramp_x_.create(o.height, o.width, CV_32F);
   ramp_y_.create(o.height, o.width, CV_32F);
   for (int v = 0; v < o.height; ++v) {
@@ -223,6 +231,9 @@ cv::Mat SyntheticSequence::renderClean(int i) const {
   cv::warpPerspective(ground, frame, ground_to_mosaic * imageToGround(pose, camera_),
                       cv::Size(camera_.width, camera_.height),
                       cv::INTER_LINEAR | cv::WARP_INVERSE_MAP, cv::BORDER_REPLICATE);
+  if (options_.ground_contrast != 1.0)
+    frame.convertTo(frame, CV_8U, options_.ground_contrast, 128 * (1 - options_.ground_contrast));
+  paintDecals(frame, decals_, pose, camera_);
   return frame;
 }
 

@@ -20,6 +20,7 @@
 #include <opencv2/core.hpp>
 
 #include "synthetic/camera_model.h"
+#include "synthetic/lookalikes.h"
 
 namespace placedb::synthetic {
 
@@ -31,8 +32,18 @@ struct SyntheticOptions {
   int width = 320, height = 240;
   // "demo": explore the first third, then repeat streets for ~40% of the frames, interleaved
   // with more exploration. "scale": a long exploration of a growing town with periodic repeats
-  // of earlier (often long-forgotten) streets, ~25% of the frames.
+  // of earlier (often long-forgotten) streets, ~25% of the frames. "single_pass": one straight
+  // street that is never driven again (no revisit: every loop closure on it is false).
   std::string profile = "demo";
+
+  // Objects that stand at more than one place (lookalikes.h): "none", "poster" (one poster at
+  // two places lookalike_gap frames apart) or "corridor" (a door and lockers on both sides
+  // every lookalike_pitch metres). ground_contrast scales the ground texture's contrast about
+  // mid-grey: below 1, a blander floor, where the objects give most of the features.
+  std::string lookalike = "none";
+  int lookalike_gap = 48;
+  double lookalike_pitch = 3.0;
+  double ground_contrast = 1.0;
 
   // Route. Negative or zero values take the profile's default.
   double revisit_fraction = -1;        // share of the route planned as repeated streets
@@ -101,6 +112,7 @@ class SyntheticSequence {
   std::vector<std::pair<int, int>> pairs_;
   std::vector<std::size_t> first_pair_;  // pairs_ of frame q are [first_pair_[q], first_pair_[q+1])
   std::unique_ptr<GroundTexture> texture_;
+  std::vector<Decal> decals_;
   cv::Mat ramp_x_, ramp_y_;  // -0.5..0.5 across the image, for light gradients
 };
 
