@@ -186,6 +186,15 @@ TEST(Options, StoredSettingsWithoutALaterSettingKeepWhatTheSessionRan) {
   EXPECT_EQ(Options::fromStoredSettings(stored).feature_retry, 0.5);
   EXPECT_EQ(Options::fromStoredSettings(stored).geometry_max_error_diagonal, 0.0);
   EXPECT_EQ(Options::fromSettings(stored).feature_retry, 1.0);
+  // ... and one stored before a frame's candidates were counted as one family of tests and a
+  // place had to share the frame's scene (issue 45): it resumes deciding as it did.
+  stored = Options().toSettings();
+  stored.erase("geometry_count_candidates");
+  stored.erase("geometry_min_scene_share");
+  EXPECT_FALSE(Options::fromStoredSettings(stored).geometry_count_candidates);
+  EXPECT_EQ(Options::fromStoredSettings(stored).geometry_min_scene_share, 0.0);
+  EXPECT_TRUE(Options::fromSettings(stored).geometry_count_candidates);
+  EXPECT_EQ(Options::fromSettings(stored).geometry_min_scene_share, 0.25);
 }
 
 }  // namespace

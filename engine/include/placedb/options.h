@@ -102,6 +102,13 @@ struct Options {
   double geometry_max_error_diagonal = 0.01;  // ... nor above this share of the image's
                                               // diagonal (small images); 0 = pixels alone
   double geometry_match_ratio = 0.8;          // descriptor ratio test for the check's matches
+  // A frame's candidates are one family of tests: each candidate's NFA is multiplied by their
+  // number, and the inliers rule also needs that product at most 1 (false: each place alone).
+  bool geometry_count_candidates = true;
+  // A place that passes on its own must cover at least this share of the frame's scene with its
+  // agreeing pairs, or it shares an object, not the place (engine/src/geometry/scene_extent.h);
+  // 0 = off.
+  double geometry_min_scene_share = 0.25;
 
   // --- temporal consistency (iBoW-LCD's islands; RTAB-Map's closures that follow the graph) ---
   // A hypothesis that misses the check's rule still passes a relaxed one (temporal_min_inliers,
@@ -142,7 +149,8 @@ struct Options {
   static Options fromSettings(const std::map<std::string, std::string>& settings);
   // A session's settings as a map stored them: a setting added after that session began takes
   // the value that reproduces it (feature_target 0, feature_retry 0.5, geometry_max_error_diagonal
-  // 0), so a resumed session decides as it did.
+  // 0, geometry_count_candidates false, geometry_min_scene_share 0), so a resumed session decides
+  // as it did.
   static Options fromStoredSettings(const std::map<std::string, std::string>& settings);
   std::map<std::string, std::string> toSettings() const;
   void validate() const;

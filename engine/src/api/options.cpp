@@ -241,6 +241,14 @@ const std::vector<Row>& table() {
            "geometry_max_error_px alone"),
       real("geometry_match_ratio", &Options::geometry_match_ratio, 0.1, 1, "0.1..1",
            "geometric check: nearest/second-nearest descriptor distance ratio for a match"),
+      boolean("geometry_count_candidates", &Options::geometry_count_candidates,
+              "geometric check: a frame's candidates are one family of tests, so each "
+              "candidate's NFA is multiplied by their number, and the inliers rule also needs "
+              "that product at most 1 (no acceptance at the level of chance)"),
+      real("geometry_min_scene_share", &Options::geometry_min_scene_share, 0, 1, "0..1",
+           "a place that passes the check on its own must also cover this share of the scene "
+           "the frame shares with its own previous view (its pairs on planes, corrected for "
+           "their number), or it shares an object, not the place; 0 = off"),
       integer("temporal_min_inliers", &Options::temporal_min_inliers, 0, 10000, "0..10000",
               "inliers rule: inliers that suffice for a hypothesis near the last accepted loop "
               "closure (see temporal_radius, temporal_max_gap); 0 = off"),
@@ -326,6 +334,8 @@ Options Options::fromStoredSettings(const std::map<std::string, std::string>& se
   before.feature_target = 0;
   before.feature_retry = 0.5;
   before.geometry_max_error_diagonal = 0;
+  before.geometry_count_candidates = false;
+  before.geometry_min_scene_share = 0;
   return fromSettings(settings, before);
 }
 

@@ -29,6 +29,7 @@ class LinkGraph {
 
   bool hasNode(LocationId id) const { return adjacency_.count(id) != 0; }
   bool hasLink(LocationId a, LocationId b) const;
+  bool isLoopClosure(LocationId a, LocationId b) const;  // a link of kind kLoopClosure
   std::size_t nodeCount() const { return adjacency_.size(); }
   // Sorted; empty when the node is absent.
   std::vector<LocationId> neighbours(LocationId id) const;
@@ -45,8 +46,6 @@ class LinkGraph {
                                                       LinkWalk walk = LinkWalk::kAnyLink) const;
 
  private:
-  bool isLoopClosure(LocationId a, LocationId b) const;
-
   std::map<LocationId, std::set<LocationId>> adjacency_;
   std::set<std::pair<LocationId, LocationId>> loop_closures_;  // (smaller, larger) id
 };

@@ -252,6 +252,8 @@ EpipolarFit fitEpipolar(const std::vector<cv::Point2f>& a, const std::vector<cv:
   std::vector<double> log_choose(static_cast<std::size_t>(n - kSample + 1));
   for (int j = 0; j <= n - kSample; ++j) log_choose[j] = log10Choose(n - kSample, j);
   const double pass_at = std::log10(settings.max_nfa);
+  const double count_pass_at =
+      settings.stop_at_inliers_nfa > 0 ? std::log10(settings.stop_at_inliers_nfa) : 1e300;
   // Whether `draws` samples find one of 7 agreeing pairs with the confidence asked for.
   const double log_miss = settings.confidence > 0 ? std::log1p(-settings.confidence) : 0.0;
   auto confident = [&](int draws) {
@@ -348,7 +350,8 @@ EpipolarFit fitEpipolar(const std::vector<cv::Point2f>& a, const std::vector<cv:
       const int count = sevenPoint(systems[k++], models);
       for (int m = 0; m < count; ++m) evaluate(toPixels(models[m], na, nb));
       if ((settings.stop_when_passed && fit.log10_nfa <= pass_at) ||
-          (settings.stop_at_inliers > 0 && fit.most_within_max_error >= settings.stop_at_inliers) ||
+          (settings.stop_at_inliers > 0 && fit.most_within_max_error >= settings.stop_at_inliers &&
+           fit.log10_nfa <= count_pass_at) ||
           confident(it + j + 1)) {
         stopped = true;
         break;

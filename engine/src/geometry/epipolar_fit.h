@@ -24,11 +24,12 @@
 namespace placedb {
 
 struct EpipolarFitSettings {
-  int iterations = 400;          // 7-point samples drawn (fewer when a sample passes early)
-  double max_nfa = 1.0;          // a fit passes at this many expected false alarms or fewer
-  double max_error_px = 8;       // distances above this never count as agreement
-  bool stop_when_passed = true;  // stop at the first model that passes (its NFA, not the best)
-  int stop_at_inliers = 0;       // also stop once a model has this many pairs within max_error_px
+  int iterations = 400;            // 7-point samples drawn (fewer when a sample passes early)
+  double max_nfa = 1.0;            // a fit passes at this many expected false alarms or fewer
+  double max_error_px = 8;         // distances above this never count as agreement
+  bool stop_when_passed = true;    // stop at the first model that passes (its NFA, not the best)
+  int stop_at_inliers = 0;         // also stop once a model has this many pairs within max_error_px
+  double stop_at_inliers_nfa = 0;  // ... and the best NFA is at most this (0: whatever the NFA)
   // Also stop once the samples drawn would have drawn, with this probability, one sample of 7
   // pairs all within max_error_px of the best model so far (RANSAC's adaptive count: N draws
   // with log(1 - confidence) / log(1 - w^7), w that model's share of the pairs); 0 = off. For

@@ -172,19 +172,26 @@ GeometricResult fit(const Pairs& pairs, cv::Size2f extent, int keypoints,
   GeometricResult r;
   r.keypoints = keypoints;
   r.matches = static_cast<int>(pairs.a.size());
+  // The count a pass by the inliers rule needs (a 7-point model fits any 7 pairs: agreement
+  // starts at the 8th), and the false alarms it may have over the frame's places.
+  const int need = std::max(s.min_inliers, 8);
+  const double tests = std::max(1, s.tests);
+  const auto beyondChance = [&](double log10_nfa) {
+    return s.count_max_nfa <= 0 || log10_nfa + std::log10(tests) <= std::log10(s.count_max_nfa);
+  };
   EpipolarFitSettings fs;
   fs.iterations = s.iterations;
-  fs.max_nfa = s.max_nfa;
+  fs.max_nfa = s.max_nfa / tests;
   fs.max_error_px = s.max_error_px;
   const bool count = s.rule != GeometryRule::kNfa, chance = s.rule != GeometryRule::kInliers;
   fs.stop_when_passed = chance && !s.exhaustive;
-  fs.stop_at_inliers = count && !s.exhaustive ? s.min_inliers : 0;
+  fs.stop_at_inliers = count && !s.exhaustive ? need : 0;
+  fs.stop_at_inliers_nfa = s.count_max_nfa > 0 ? s.count_max_nfa / tests : 0;
   fs.confidence = confidence;
   const EpipolarFit f = fitEpipolar(pairs.a, pairs.b, extent, fs);
   r.log10_nfa = f.log10_nfa;
   r.inliers = count ? f.most_within_max_error : f.inliers;
-  // A 7-point model fits any 7 pairs: agreement starts at the 8th.
-  const bool by_count = count && f.most_within_max_error >= std::max(s.min_inliers, 8);
+  const bool by_count = count && f.most_within_max_error >= need && beyondChance(f.log10_nfa);
   const bool by_chance =
       chance && f.passed && f.inliers >= minimumInliers(s.min_overlap, keypoints);
   r.passed = by_count || by_chance;
@@ -203,8 +210,8 @@ GeometricResult fit(const Pairs& pairs, cv::Size2f extent, int keypoints,
       if (cv::norm(pairs.a[i] - pairs.b[i]) <= s.max_error_px) ++still;
     const double log10_nfa =
         epipolarLog10Nfa(r.matches, still, s.max_error_px, extent, /*iterations=*/1);
-    const bool still_by_count = count && still >= std::max(s.min_inliers, 8);
-    const bool still_by_chance = chance && log10_nfa <= std::log10(s.max_nfa) &&
+    const bool still_by_count = count && still >= need && beyondChance(log10_nfa);
+    const bool still_by_chance = chance && log10_nfa + std::log10(tests) <= std::log10(s.max_nfa) &&
                                  still >= std::max(8, minimumInliers(s.min_overlap, keypoints));
     if (still_by_count || still_by_chance) {
       r.inliers = still;

@@ -60,6 +60,13 @@ struct GeometricCheckSettings {
   double max_error_px = Options().geometry_max_error_px;  // farther from the epipolar line: out
   double max_error_diagonal = Options().geometry_max_error_diagonal;  // ... or this x diagonal
   double match_ratio = Options().geometry_match_ratio;  // nearest / second-nearest distance
+  // Places the frame's acceptance is chosen among (its candidates): every false alarm count is
+  // multiplied by them, since a frame that tries 13 places has 13 chances to pass by chance.
+  int tests = 1;
+  // The inliers rule passes only where the best model's NFA x tests is at most this: a count
+  // of pairs that chance gives as often is no evidence (0: the count alone, as maps made before
+  // geometry_count_candidates keep).
+  double count_max_nfa = 0;
   int iterations = 400;  // RANSAC samples at most, per set of correspondences
   // Off (mapping): stop as soon as the rule is met, so the inliers counted can stop there too.
   // On (ranking several candidates, as query does): no early exit, and both the word pairs and

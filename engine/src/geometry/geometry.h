@@ -7,3 +7,4 @@
 #include "geometry/geometric_check.h"
 #include "geometry/keypoint_cache.h"
 #include "geometry/relative_pose.h"
+#include "geometry/scene_extent.h"

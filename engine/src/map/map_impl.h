@@ -112,19 +112,34 @@ class MapImpl final : public Map {
     bool temporal = false;       // passed on the relaxed rule, near the last accepted closure
     bool continues_run = false;  // lies within the reach of the closure run (closure_run.h)
     int checked = 0;             // candidates the check ran on
-    double log10_nfa = 0;        // the reported candidate's number of false alarms, log10
+    double log10_nfa = 0;        // the reported candidate's false alarms over `places`, log10
     GeometricResult geometry;    // the reported candidate's check (its agreeing pairs)
     ClosureEvidence evidence;    // the check's evidence over the frames up to this one
     bool by_evidence = false;    // passed as a run of frames, not as this frame alone
+    int places = 1;              // candidates the false alarms were counted over
+    // Set when the place passed the check but shares too little of the frame's scene
+    // (scene_extent.h): an object, not the place. The frame is then refused.
+    std::optional<SceneShare> object_only;
   };
   // Links the frame's location to the accepted closure; one that passed on its own anchors the
   // closure run (closure_run.h).
   void acceptLoopClosure(std::int64_t hypothesis, const Verified& verified, FrameResult& result,
                          FrameWrite& write);
+  // `own_view` is the frame's previous view of its own scene (the location it merged into, or
+  // the one before its new location; 0 when there is none), against which a closure's share of
+  // the scene is measured.
   Verified verifyHypothesis(const FilterOutcome& outcome, const Features& features,
                             const std::vector<std::int64_t>& word_of_feature,
                             const std::vector<LocationSimilarity>& similarities,
-                            std::int64_t frame_id);
+                            std::int64_t frame_id, LocationId own_view);
+  // Why a hypothesis was not accepted, for the log and the map's hypotheses table.
+  static std::string rejectionOf(const FilterOutcome& outcome, const Verified& verified);
+  // The frame's previous view of its own scene (see verifyHypothesis), 0 when there is none.
+  LocationId ownViewOf(const FrameResult& r) const;
+  // The location before `location` on its traversal (its neighbour link), 0 when none is live.
+  LocationId traversalPredecessor(LocationId location) const;
+  // The share of the frame's scene that an accepted place's comparison covers (scene_extent.h).
+  SceneShare sceneOf(const GeometricResult& place, LocationId own_view, const GeometricView& query);
   // The WM locations that continue the closure run at this frame (closure_run.h), sorted; empty
   // when temporal consistency is off or the frame continues no run.
   std::vector<LocationId> nearLastClosure(std::int64_t frame_id) const;
@@ -134,8 +149,9 @@ class MapImpl final : public Map {
   // Of an accepted place and its traversal neighbours in WM, the one `query` agrees with best
   // (agreeing_place.h).
   std::optional<AgreeingPlace> agreeingPlace(LocationId accepted, const GeometricView& query);
-  // A frame's own evidence for the run: its NFA, or at most geometry_max_nfa when it passed.
-  double frameEvidence(const GeometricResult& g) const;
+  // A frame's own evidence for the run: its NFA over the `places` it chose among, or at most
+  // geometry_max_nfa when it passed.
+  double frameEvidence(const GeometricResult& g, int places) const;
   // The relaxed rule (temporal_*) for a candidate near the last accepted closure.
   bool passesNearLastClosure(const GeometricResult& g) const;
   const CachedKeypoints& keypointsOf(std::int64_t location_id);   // from the cache or the file

@@ -234,6 +234,31 @@ void MapImpl::placeInShortTermMemory(const Features& features, const Quantised& 
   w.frame.location_id = r.location_id;
 }
 
+std::string MapImpl::rejectionOf(const FilterOutcome& outcome, const Verified& verified) {
+  if (verified.object_only)
+    return fmt::format(
+        "scene: {} inliers of {} matches cover {:.0f} % of the frame's scene (an object, not "
+        "the place)",
+        verified.inliers, verified.matches, 100 * verified.object_only->share);
+  if (verified.passed) return toString(outcome.reason);
+  const std::string over =
+      verified.places > 1 ? fmt::format(" over {} places", verified.places) : std::string();
+  return fmt::format("geometry: {} inliers of {} matches, NFA 1e{:.1f}{}", verified.inliers,
+                     verified.matches, verified.log10_nfa, over);
+}
+
+LocationId MapImpl::ownViewOf(const FrameResult& r) const {
+  return r.outcome == FrameOutcome::kMerged ? r.location_id : traversalPredecessor(r.location_id);
+}
+
+LocationId MapImpl::traversalPredecessor(LocationId location) const {
+  // A new location is linked to the one before it when that one was live (STM or WM).
+  LocationId previous = 0;
+  for (LocationId n : graph_.neighbourSet(location))
+    if (n < location && !graph_.isLoopClosure(n, location)) previous = std::max(previous, n);
+  return previous;
+}
+
 std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Features& features,
                                         const Quantised& q,
                                         const std::vector<LocationSimilarity>& similarities,
@@ -241,8 +266,8 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
   // The reported hypothesis is chosen among the filter's best and its competitors by the
   // geometric check.
   const auto verify_start = Clock::now();
-  const Verified verified =
-      verifyHypothesis(outcome, features, q.word_of_feature, similarities, frameClock(r.frame_id));
+  const Verified verified = verifyHypothesis(outcome, features, q.word_of_feature, similarities,
+                                             frameClock(r.frame_id), ownViewOf(r));
   // Measuring the pose is part of verification; it never changes the decision.
   std::optional<storage::ClosurePose> pose;
   if (options_.hasIntrinsics() && verified.location != kNewPlace && outcome.accepted &&
@@ -270,12 +295,7 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
       r.hypothesis.pose = pose;
       acceptLoopClosure(hypothesis, verified, r, w);
     }
-    if (!r.hypothesis.accepted) {
-      reason = verified.passed
-                   ? std::string(toString(outcome.reason))
-                   : fmt::format("geometry: {} inliers of {} matches, NFA 1e{:.1f}",
-                                 verified.inliers, verified.matches, verified.log10_nfa);
-    }
+    if (!r.hypothesis.accepted) reason = rejectionOf(outcome, verified);
   } else {
     reason = toString(outcome.reason);
   }

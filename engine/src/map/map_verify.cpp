@@ -100,8 +100,8 @@ std::vector<LocationId> MapImpl::continuingEvidence(std::int64_t frame_id) const
   return reach;
 }
 
-double MapImpl::frameEvidence(const GeometricResult& g) const {
-  const double own = std::min(g.log10_nfa, kNoModel);
+double MapImpl::frameEvidence(const GeometricResult& g, int places) const {
+  const double own = std::min(g.log10_nfa + std::log10(std::max(1, places)), kNoModel);
   return g.passed ? std::min(own, std::log10(options_.geometry_max_nfa)) : own;
 }
 
@@ -141,10 +141,25 @@ std::optional<AgreeingPlace> MapImpl::agreeingPlace(LocationId accepted,
                            });
 }
 
+SceneShare MapImpl::sceneOf(const GeometricResult& place, LocationId own_view,
+                            const GeometricView& query) {
+  const GeometricCheckSettings compare = toGeometricCheckSettings(options_);
+  // The frame's previous view, or the one before it when that one shows too little of the
+  // scene to measure it (a blurred or featureless frame).
+  std::optional<GeometricResult> own;
+  for (int back = 0; back < 2 && own_view; ++back, own_view = traversalPredecessor(own_view)) {
+    const CachedKeypoints& keypoints = keypointsOf(own_view);
+    if (keypoints.points.empty()) continue;
+    own = compareGeometry(query, viewOf(keypoints), compare);
+    if (static_cast<int>(own->agreeing_query.size()) >= kMinPlanePairs) break;
+  }
+  return sceneShare(place, own ? &*own : nullptr, agreementDistance(compare, query.image_size));
+}
+
 MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const Features& features,
                                             const std::vector<std::int64_t>& word_of_feature,
                                             const std::vector<LocationSimilarity>& similarities,
-                                            std::int64_t frame_id) {
+                                            std::int64_t frame_id, LocationId own_view) {
   Verified v;
   v.location = outcome.hypothesis;
   if (outcome.hypothesis == kNewPlace) return v;
@@ -189,7 +204,9 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   const std::vector<LocationId> candidates = orderCandidates(
       sources, [&similarities](LocationId c) { return similarityOf(similarities, c); });
 
-  const GeometricCheckSettings geometry = toGeometricCheckSettings(options_);
+  GeometricCheckSettings geometry = toGeometricCheckSettings(options_);
+  if (options_.geometry_count_candidates)
+    v.places = geometry.tests = std::max(1, static_cast<int>(candidates.size()));
   if (!geometricCheckOn(options_)) {
     // No check: the most similar candidate, the filter's own choice on ties.
     double best = -1.0;
@@ -204,8 +221,11 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
     return v;
   }
 
-  // Entries of locations that left working memory go; a candidate is always in WM.
-  keypoint_cache_.retainIf([this](LocationId id) { return tiers_->isIn(id, Tier::kWm); });
+  // Entries of locations that left working memory go; a candidate is always in WM, and the
+  // frame's own previous view (scene_extent.h) in STM or WM.
+  keypoint_cache_.retainIf([this](LocationId id) {
+    return tiers_->isIn(id, Tier::kWm) || tiers_->isIn(id, Tier::kStm);
+  });
 
   GeometricView query;
   query.descriptors = features.descriptors;
@@ -245,13 +265,14 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
                ? static_cast<int>(continuing.size())
                : 0;
   };
-  v.evidence = addEvidence(before, reported, frame_id, *session_id_, frameEvidence(*result),
-                           alternativesOf(reported));
+  v.evidence = addEvidence(before, reported, frame_id, *session_id_,
+                           frameEvidence(*result, v.places), alternativesOf(reported));
   if (!choice.passed) {
     // No frame passes alone: the strongest run through a place that continues the last one.
     for (const auto& [c, g] : checked_continuing) {
-      const ClosureEvidence run = addEvidence(before, c, frame_id, *session_id_, frameEvidence(g),
-                                              static_cast<int>(continuing.size()));
+      const ClosureEvidence run =
+          addEvidence(before, c, frame_id, *session_id_, frameEvidence(g, v.places),
+                      static_cast<int>(continuing.size()));
       if (run.log10_nfa < v.evidence.log10_nfa) {
         v.evidence = run;
         reported = c;
@@ -274,12 +295,24 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
     reported = agreeing->location;
     result = &agreeing->result;
   }
+  // A place that passed on its own must share the frame's scene, not one object of it. The
+  // relaxed rule and runs of frames lean on a closure that did.
+  if (v.passed && agreeing && !v.temporal && !v.by_evidence &&
+      options_.geometry_min_scene_share > 0) {
+    const SceneShare scene = sceneOf(agreeing->result, own_view, query);
+    if (scene.measured && scene.share < options_.geometry_min_scene_share) {
+      v.passed = false;
+      v.object_only = scene;
+      v.evidence = ClosureEvidence{};  // an object's agreement carries no run either
+    }
+  }
   v.location = reported;
   v.geometry = *result;
   v.continues_run = std::binary_search(near.begin(), near.end(), reported);
   v.inliers = result->inliers;
   v.matches = result->matches;
-  v.log10_nfa = std::min(result->log10_nfa, kNoModel);
+  // Counted over the places the frame chose among, as its acceptance was.
+  v.log10_nfa = std::min(result->log10_nfa + std::log10(v.places), kNoModel);
   return v;
 }
 

@@ -61,6 +61,7 @@ GeometricCheckSettings toGeometricCheckSettings(const Options& o) {
   g.max_error_px = o.geometry_max_error_px;
   g.max_error_diagonal = o.geometry_max_error_diagonal;
   g.match_ratio = o.geometry_match_ratio;
+  g.count_max_nfa = o.geometry_count_candidates ? 1.0 : 0.0;
   return g;
 }
 
