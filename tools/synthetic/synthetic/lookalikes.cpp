@@ -14,6 +14,10 @@ namespace placedb::synthetic {
 namespace {
 
 constexpr double kPixelsPerMetre = 160;
+// The poster is drawn at kPixelsPerMetre and laid at this density: 1.2 x 0.73 m, an A0 sheet or
+// the side of a newspaper stand, a metre to the left of the walk.
+constexpr double kPosterPixelsPerMetre = 240;
+constexpr double kPosterSide = 1.0;
 constexpr std::uint64_t kPosterSalt = 0x9057e7;
 
 // A printed poster or the side of a newspaper stand: large lettering, a logo and a frame,
@@ -102,7 +106,8 @@ std::vector<Decal> placeLookalikes(const SyntheticOptions& o, const std::vector<
     for (int frame : {first, first + o.lookalike_gap}) {
       if (frame >= static_cast<int>(poses.size())) break;
       const Pose& p = poses[static_cast<std::size_t>(frame)];
-      decals.push_back({picture, kPixelsPerMetre, inFrontOf(p, ahead, 0.3), p.heading});
+      decals.push_back(
+          {picture, kPosterPixelsPerMetre, inFrontOf(p, ahead, kPosterSide), p.heading});
     }
     return decals;
   }

@@ -1,0 +1,94 @@
+// Where a map must accept nothing: walks that never come back to a place. Each dev set cut before
+// its first revisit, and a synthetic walk past one poster that stands at two places, with the
+// defaults and with working memory capped. Every closure accepted there is false, and one false
+// closure breaks a SLAM back end's map, so each test fails on the first one and names it.
+// bench/quality/precision.py runs the full cuts and the larger synthetic walks.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "engine_fixture.h"
+#include "synthetic/synthetic_sequence.h"
+
+namespace placedb::testing {
+namespace {
+
+// The frames a run accepted a closure on, with the frames each names.
+std::vector<std::string> acceptedClosures(const std::vector<cv::Mat>& images,
+                                          const std::string& name, const Options& options) {
+  const auto path = scratchDir(name) / "map.placedb";
+  removeMap(path);
+  auto map = Map::open(path.string(), options);
+  map->beginSession(name);
+  std::vector<std::string> accepted;
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    const FrameResult r = map->process(images[i], static_cast<std::int64_t>(i), name);
+    if (!r.hypothesis.accepted) continue;
+    std::string named;
+    for (const auto& f : r.hypothesis.frames) named += " " + std::to_string(f.source_index);
+    accepted.push_back(std::to_string(i) + " on" + named);
+  }
+  map->close();
+  return accepted;
+}
+
+Options capped(int wm_max) {
+  Options o;
+  o.wm_max = wm_max;
+  return o;
+}
+
+struct Cut {
+  const char* dataset;
+  std::size_t frames;  // before the first revisit (gt_pairs.txt's smallest q)
+};
+
+class DevSetCut : public ::testing::TestWithParam<Cut> {};
+
+TEST_P(DevSetCut, AcceptsNoClosureWithTheDefaultsNorWithWorkingMemoryCapped) {
+  const Cut cut = GetParam();
+  const auto dir = dataset(cut.dataset);
+  if (dir.empty()) GTEST_SKIP() << "no " << cut.dataset << " under " << datasetsDir();
+  const Sequence seq = loadSequence(dir, cut.frames);
+  const std::string name = std::string("cut_") + cut.dataset;
+  EXPECT_EQ(acceptedClosures(seq.images, name, Options()), std::vector<std::string>());
+  // A cap that binds within the cut: the 300 on the longer cuts, a third of the
+  // locations on rtabmap_samples' 40 frames.
+  const int wm_max = cut.frames > 100 ? 300 : 10;
+  EXPECT_EQ(acceptedClosures(seq.images, name + "_capped", capped(wm_max)),
+            std::vector<std::string>())
+      << "wm_max=" << wm_max;
+}
+
+INSTANTIATE_TEST_SUITE_P(BeforeTheFirstRevisit, DevSetCut,
+                         ::testing::Values(Cut{"rtabmap_samples", 40},
+                                           Cut{"lip6_outdoor_120x96", 460},
+                                           Cut{"lip6_outdoor_160x128", 460},
+                                           Cut{"lip6_outdoor", 460}),
+                         [](const auto& info) { return std::string(info.param.dataset); });
+
+// A walk that never comes back, 0.5 m a frame, past one A0 poster laid at two places 48 frames
+// apart (synthetic/lookalikes.h), seen by a small camera: everything else in the two views
+// differs.
+TEST(LookalikeWalk, OnePosterAtTwoPlacesIsNotAPlace) {
+  synthetic::SyntheticOptions o;
+  o.profile = "single_pass";
+  o.lookalike = "poster";
+  o.frames = 200;
+  o.width = 160;
+  o.height = 120;
+  o.pitch_degrees = 40;
+  o.camera_height = 1.5;
+  o.speed = 0.5;
+  const synthetic::SyntheticSequence walk(o);
+  ASSERT_TRUE(walk.groundTruth().empty());
+  std::vector<cv::Mat> images;
+  for (int i = 0; i < walk.size(); ++i) images.push_back(walk.render(i));
+  EXPECT_EQ(acceptedClosures(images, "poster_walk", Options()), std::vector<std::string>());
+  EXPECT_EQ(acceptedClosures(images, "poster_walk_capped", capped(30)), std::vector<std::string>())
+      << "wm_max=30";
+}
+
+}  // namespace
+}  // namespace placedb::testing
