@@ -20,7 +20,7 @@ CameraIntrinsics CameraIntrinsics::fromHorizontalFov(int width, int height, doub
 
 double CameraIntrinsics::verticalFov() const { return 2.0 * std::atan(0.5 * height / focal); }
 
-cv::Matx33d imageToGround(const Pose& pose, const CameraIntrinsics& camera) {
+cv::Matx33d pixelRays(const Pose& pose, const CameraIntrinsics& camera) {
   const double ch = std::cos(pose.heading), sh = std::sin(pose.heading);
   const double cp = std::cos(pose.pitch), sp = std::sin(pose.pitch);
   const cv::Vec3d forward(cp * ch, cp * sh, -sp);  // optical axis
@@ -29,14 +29,35 @@ cv::Matx33d imageToGround(const Pose& pose, const CameraIntrinsics& camera) {
   // Ray of pixel (u, v): right*(u-cx)/f + down*(v-cy)/f + forward.
   const double f = camera.focal;
   const cv::Vec3d offset = forward - right * (camera.cx / f) - down * (camera.cy / f);
-  const cv::Matx33d rays(right[0] / f, down[0] / f, offset[0],  //
-                         right[1] / f, down[1] / f, offset[1],  //
-                         right[2] / f, down[2] / f, offset[2]);
-  // Ground point C + t*d with t = -h/d_z, scaled by -d_z to stay homogeneous.
+  return cv::Matx33d(right[0] / f, down[0] / f, offset[0],  //
+                     right[1] / f, down[1] / f, offset[1],  //
+                     right[2] / f, down[2] / f, offset[2]);
+}
+
+cv::Matx33d imageToPlane(const Pose& pose, const CameraIntrinsics& camera,
+                         const PlaneFrame& plane) {
+  // The ray C + l*d meets the plane at l = n.(O - C) / n.d. With w = n.d as the homogeneous
+  // scale, s * w = a.(C - O) n.d + n.(O - C) a.d, and likewise for t: linear in d, so linear in
+  // the pixel.
+  const cv::Vec3d camera_centre(pose.x, pose.y, pose.height);
+  const cv::Vec3d n = plane.s_axis.cross(plane.t_axis);
+  const cv::Vec3d to_camera = camera_centre - plane.origin;
+  const double n_gap = -n.dot(to_camera);
+  const cv::Vec3d s_row = n * plane.s_axis.dot(to_camera) + plane.s_axis * n_gap;
+  const cv::Vec3d t_row = n * plane.t_axis.dot(to_camera) + plane.t_axis * n_gap;
+  const cv::Matx33d to_plane(s_row[0], s_row[1], s_row[2],  //
+                             t_row[0], t_row[1], t_row[2],  //
+                             n[0], n[1], n[2]);
+  return to_plane * pixelRays(pose, camera);
+}
+
+cv::Matx33d imageToGround(const Pose& pose, const CameraIntrinsics& camera) {
+  // imageToPlane()'s rule for n = (0, 0, 1), written out (and scaled by -1) so the ground scene's
+  // arithmetic, and so its images, stay exactly what they were.
   const cv::Matx33d to_ground(pose.height, 0, -pose.x,  //
                               0, pose.height, -pose.y,  //
                               0, 0, -1);
-  return to_ground * rays;
+  return to_ground * pixelRays(pose, camera);
 }
 
 cv::Matx33d groundToImage(const Pose& pose, const CameraIntrinsics& camera) {

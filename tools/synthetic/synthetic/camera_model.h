@@ -1,5 +1,6 @@
 #pragma once
-// A pinhole camera above an infinite flat ground: every image is a homography of the ground.
+// A pinhole camera in a world of planes: every image of one plane is a homography of it. The
+// ground scene is one infinite plane (the ground); the canyon scenes (canyon.h) are a few.
 #include <array>
 
 #include <opencv2/core.hpp>
@@ -22,8 +23,23 @@ struct CameraIntrinsics {
   double verticalFov() const;
 };
 
-// Maps homogeneous pixel coordinates (u, v, 1) to homogeneous ground coordinates (x, y, 1).
-// Only valid while the whole image looks below the horizon (see lowestViewAngle()).
+// Maps homogeneous pixel coordinates (u, v, 1) to the world direction of the pixel's ray,
+// scaled so that its component along the optical axis is 1 (the depth of a point on the ray).
+cv::Matx33d pixelRays(const Pose& pose, const CameraIntrinsics& camera);
+
+// A plane with its own 2D coordinates in metres: the point (s, t) is origin + s * s_axis +
+// t * t_axis (unit, orthogonal axes).
+struct PlaneFrame {
+  cv::Vec3d origin, s_axis, t_axis;
+};
+
+// Maps homogeneous pixel coordinates (u, v, 1) to homogeneous plane coordinates (s, t, 1), where
+// each pixel's ray meets the plane. Pixels whose ray meets it behind the camera map to points
+// too, so callers must keep only the pixels that see the plane (depth > 0).
+cv::Matx33d imageToPlane(const Pose& pose, const CameraIntrinsics& camera, const PlaneFrame& plane);
+
+// imageToPlane() of the ground (z = 0, s = x, t = y) up to scale. Only valid while the whole
+// image looks below the horizon.
 cv::Matx33d imageToGround(const Pose& pose, const CameraIntrinsics& camera);
 cv::Matx33d groundToImage(const Pose& pose, const CameraIntrinsics& camera);
 
