@@ -5,10 +5,11 @@
 // worlds hold such objects on a walk that never comes back, so every loop closure accepted on
 // them is false.
 //
-// An object is a flat picture lying on the ground (the synthetic world is a plane), painted over
-// the ground texture: one poster at two places `lookalike_gap` frames apart along the route, or a
-// door-and-lockers motif on both sides of the route every `lookalike_pitch` metres. Every copy of
-// an object is the same picture, pixel for pixel.
+// In the ground scene an object is a flat picture lying on the ground (that world is a plane),
+// painted over the ground texture: one poster at two places `lookalike_gap` frames apart along
+// the route, or a door-and-lockers motif on both sides of the route every `lookalike_pitch`
+// metres. In the canyon scenes (canyon.h) the same objects stand upright on the walls, at their
+// real sizes. Every copy of an object is the same picture, pixel for pixel.
 #include <memory>
 #include <vector>
 
@@ -19,6 +20,7 @@
 namespace placedb::synthetic {
 
 struct SyntheticOptions;
+struct CanyonBox;
 
 struct Decal {
   std::shared_ptr<const cv::Mat> picture;  // 8-bit grey, pixels_per_metre
@@ -34,5 +36,31 @@ std::vector<Decal> placeLookalikes(const SyntheticOptions& options, const std::v
 // Paints the decals that the camera at `pose` sees over `frame` (its ground, width x height).
 void paintDecals(cv::Mat& frame, const std::vector<Decal>& decals, const Pose& pose,
                  const CameraIntrinsics& camera);
+
+// A picture that stands upright on a wall: what it shows and what of the wall it covers (a door
+// and lockers leave the wall between them visible). Row 0 is the picture's top.
+struct UprightPicture {
+  cv::Mat grey;  // 8-bit
+  cv::Mat mask;  // 8-bit, 255 where the picture covers the wall, 0 where the wall shows
+  double pixels_per_metre = 160;
+  double width() const { return grey.cols / pixels_per_metre; }
+  double height() const { return grey.rows / pixels_per_metre; }
+};
+
+enum class WallSide { kLeft, kRight };  // as seen walking along +x
+
+struct WallDecal {
+  std::shared_ptr<const UprightPicture> picture;
+  WallSide side = WallSide::kLeft;
+  double x = 0;       // metres: where along the canyon the picture's centre is
+  double bottom = 0;  // metres above the floor of the picture's lower edge
+};
+
+// The objects of `options.lookalike` on the walls of `box` along the straight walk of `poses`:
+// "poster", one poster on the right-hand wall ahead of two frames lookalike_gap apart; "corridor",
+// a door and lockers on both walls every lookalike_pitch metres from end to end.
+// Throws placedb::Error(kInvalidArgument) for an unknown kind.
+std::vector<WallDecal> placeWallLookalikes(const SyntheticOptions& options,
+                                           const std::vector<Pose>& poses, const CanyonBox& box);
 
 }  // namespace placedb::synthetic

@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "placedb/error.h"
+#include "synthetic/canyon.h"
 #include "synthetic/ground_texture.h"
 #include "synthetic/ground_truth.h"
 #include "synthetic/route_planner.h"
@@ -60,15 +61,23 @@ void validate(const SyntheticOptions& o, const CameraIntrinsics& camera) {
   require(o.camera_height > 0.5 && o.camera_height < 100, "camera_height must be in (0.5, 100)");
   require(o.hfov_degrees > 10 && o.hfov_degrees < 120, "hfov_degrees must be in (10, 120)");
   require(o.gt_min_shared > 0 && o.gt_min_shared <= 1, "gt_min_shared must be in (0, 1]");
+  require(o.noise_sigma >= 0 && o.lateral_wander >= 0 && o.height_wander >= 0 &&
+              o.pitch_wander_degrees >= 0,
+          "wander and noise must not be negative");
+  require(o.lookalike_gap >= 1 && o.lookalike_pitch > 0,
+          "lookalike gap and pitch must be positive");
+  require(o.ground_contrast >= 0 && o.ground_contrast <= 1, "ground_contrast must be in [0, 1]");
+  require(o.scene == "ground" || o.scene == "corridor" || o.scene == "street",
+          "scene must be \"ground\", \"corridor\" or \"street\", not \"" + o.scene + "\"");
+  if (o.scene != "ground") {
+    validateCanyon(o, camera);
+    return;
+  }
   // The top image row must stay well below the horizon or the ground footprint is unbounded.
   const double top_ray =
       o.pitch_degrees - o.pitch_wander_degrees - camera.verticalFov() / kDegree / 2;
   require(top_ray >= 10 && o.pitch_degrees + o.pitch_wander_degrees <= 90,
           "pitch_degrees too shallow for the field of view: the image would see the horizon");
-  require(o.noise_sigma >= 0 && o.lateral_wander >= 0, "wander and noise must not be negative");
-  require(o.lookalike_gap >= 1 && o.lookalike_pitch > 0,
-          "lookalike gap and pitch must be positive");
-  require(o.ground_contrast >= 0 && o.ground_contrast <= 1, "ground_contrast must be in [0, 1]");
 }
 
 std::vector<Pose> planPoses(const SyntheticOptions& o, int attempt) {
@@ -150,35 +159,65 @@ double routeScore(const SyntheticOptions& o, const std::vector<std::pair<int, in
 
 }  // namespace
 
+SyntheticOptions sceneDefaults(const std::string& scene) {
+  SyntheticOptions o;
+  o.scene = scene;
+  if (scene == "ground") return o;
+  require(scene == "corridor" || scene == "street",
+          "scene must be \"ground\", \"corridor\" or \"street\", not \"" + scene + "\"");
+  o.profile = "single_pass";
+  o.speed = 0.3;  // a walk
+  o.camera_height = 1.5;
+  o.pitch_degrees = 6;
+  o.hfov_degrees = 60;
+  // A walker's sway: a little across the way and up and down, the heading and pitch as before.
+  o.lateral_wander = scene == "street" ? 0.4 : 0.2;
+  o.height_wander = 0.05;
+  if (scene == "street") {
+    o.canyon_half_width = 6;
+    o.canyon_height = 10;
+    o.canyon_walk_offset = -3.5;  // on the pavement, 2.5 m from the right-hand facades
+  }
+  return o;
+}
+
 SyntheticSequence::SyntheticSequence(const SyntheticOptions& options)
     : options_(withProfileDefaults(options)) {
   const SyntheticOptions& o = options_;
   camera_ = CameraIntrinsics::fromHorizontalFov(o.width, o.height, o.hfov_degrees * kDegree);
   validate(o, camera_);
-  // Short routes have few streets, so the share of repeated frames comes out coarse; try a few
-  // route variants (still a pure function of the seed) and keep the one closest to the plan.
-  const int attempts = o.frames <= 5000 && o.profile != "single_pass" ? 6 : 1;
-  double best_score = 1e300;
-  for (int attempt = 0; attempt < attempts; ++attempt) {
-    std::vector<Pose> poses = planPoses(o, attempt);
-    GroundTruthSettings gt;
-    gt.min_gap = o.min_revisit_gap;
-    gt.min_shared = o.gt_min_shared;
-    std::vector<std::pair<int, int>> pairs = computeRevisits(poses, camera_, gt);
-    const double score = attempts > 1 ? routeScore(o, alikePairs(poses, camera_, pairs)) : 0;
-    if (score < best_score) {
-      best_score = score;
-      poses_ = std::move(poses);
-      pairs_ = std::move(pairs);
+  if (o.scene == "ground") {
+    // Short routes have few streets, so the share of repeated frames comes out coarse; try a
+    // few route variants (still a pure function of the seed) and keep the one closest to the
+    // plan.
+    const int attempts = o.frames <= 5000 && o.profile != "single_pass" ? 6 : 1;
+    double best_score = 1e300;
+    for (int attempt = 0; attempt < attempts; ++attempt) {
+      std::vector<Pose> poses = planPoses(o, attempt);
+      GroundTruthSettings gt;
+      gt.min_gap = o.min_revisit_gap;
+      gt.min_shared = o.gt_min_shared;
+      std::vector<std::pair<int, int>> pairs = computeRevisits(poses, camera_, gt);
+      const double score = attempts > 1 ? routeScore(o, alikePairs(poses, camera_, pairs)) : 0;
+      if (score < best_score) {
+        best_score = score;
+        poses_ = std::move(poses);
+        pairs_ = std::move(pairs);
+      }
+      if (score < 0.04) break;
     }
-    if (score < 0.04) break;
+    texture_ = std::make_unique<GroundTexture>(hashOf(o.seed, kWorldSalt), o.tile_cache);
+    decals_ = placeLookalikes(o, poses_);
+  } else {
+    // A straight walk in a box never comes back: there is no ground truth to compute (and no
+    // ground footprint to compute it from, since a camera that sees the horizon has none).
+    poses_ = planPoses(o, 0);
+    canyon_ = std::make_unique<CanyonWorld>(o, placeWallLookalikes(o, poses_, canyonBox(o)));
   }
   first_pair_.assign(o.frames + 1, 0);
   for (const auto& pair : pairs_) ++first_pair_[pair.first + 1];
   for (int q = 0; q < o.frames; ++q) first_pair_[q + 1] += first_pair_[q];
 
-  texture_ = std::make_unique<GroundTexture>(hashOf(o.seed, kWorldSalt), o.tile_cache);
-  decals_ = placeLookalikes(o, poses_);
   ramp_x_.create(o.height, o.width, CV_32F);
   ramp_y_.create(o.height, o.width, CV_32F);
   for (int v = 0; v < o.height; ++v) {
@@ -201,16 +240,27 @@ const Pose& SyntheticSequence::checkedPose(int i) const {
 
 Pose SyntheticSequence::pose(int i) const { return checkedPose(i); }
 
+void SyntheticSequence::requireGround(const char* what) const {
+  if (canyon_) {
+    throw Error(ErrorCode::kInvalidArgument, std::string("synthetic sequence: ") + what +
+                                                 " exists only in the ground scene, not in \"" +
+                                                 options_.scene + "\"");
+  }
+}
+
 std::array<cv::Point2d, 4> SyntheticSequence::footprint(int i) const {
+  requireGround("a footprint");
   return groundFootprint(checkedPose(i), camera_);
 }
 
 cv::Matx33d SyntheticSequence::homography(int from, int to) const {
+  requireGround("a homography between frames");
   return relativeHomography(checkedPose(from), checkedPose(to), camera_);
 }
 
 cv::Mat SyntheticSequence::renderClean(int i) const {
   const Pose& pose = checkedPose(i);
+  if (canyon_) return canyon_->render(pose, camera_);
   const double scale = GroundTexture::kTexelsPerMetre;
   double min_col = 1e300, max_col = -1e300, min_row = 1e300, max_row = -1e300;
   for (const cv::Point2d& g : groundFootprint(pose, camera_)) {

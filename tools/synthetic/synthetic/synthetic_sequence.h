@@ -2,6 +2,8 @@
 // A synthetic image sequence with exact loop-closure ground truth: a camera driving through an
 // endless procedurally textured town (a tilted camera over a textured ground plane), exploring
 // new streets and driving some again. Used by `placedb demo`, the scale benchmark and tests.
+// The canyon scenes (canyon.h) put a forward-looking camera in a corridor or a street instead,
+// on a walk that never comes back.
 //
 // Everything is a deterministic function of the options: the same seed gives byte-identical
 // images and ground truth. Poses and ground truth are computed up front (a few dozen bytes per
@@ -24,10 +26,15 @@
 
 namespace placedb::synthetic {
 
+class CanyonWorld;
 class GroundTexture;
 
 struct SyntheticOptions {
   std::uint64_t seed = 1;
+  // The world: "ground", the endless textured plane seen from above by a tilted camera; or
+  // "corridor" or "street" (canyon.h), a straight box along a single_pass walk seen by a
+  // camera that looks ahead. sceneDefaults() gives each scene's camera.
+  std::string scene = "ground";
   int frames = 300;
   int width = 320, height = 240;
   // "demo": explore the first third, then repeat streets for ~40% of the frames, interleaved
@@ -39,7 +46,8 @@ struct SyntheticOptions {
   // Objects that stand at more than one place (lookalikes.h): "none", "poster" (one poster at
   // two places lookalike_gap frames apart) or "corridor" (a door and lockers on both sides
   // every lookalike_pitch metres). ground_contrast scales the ground texture's contrast about
-  // mid-grey: below 1, a blander floor, where the objects give most of the features.
+  // mid-grey (in a canyon, the floor's): below 1, a blander floor, where the objects give most
+  // of the features.
   std::string lookalike = "none";
   int lookalike_gap = 48;
   double lookalike_pitch = 3.0;
@@ -67,12 +75,26 @@ struct SyntheticOptions {
   double shading_change = 14.0;     // grey levels of a linear light gradient across the image
   double noise_sigma = 2.0;         // grey levels of per-pixel sensor noise
 
+  // The canyon scenes' box: walls canyon_half_width either side of its centre line, the walk
+  // canyon_walk_offset to the left of that line (negative: nearer the right-hand wall), the
+  // ceiling or the facades' top canyon_height above the floor. Metres; a corridor's here.
+  double canyon_half_width = 1.2;
+  double canyon_height = 2.6;
+  double canyon_walk_offset = 0;
+
   // Ground truth (see ground_truth.h): frames at least min_revisit_gap apart whose views share
   // at least this much of the smaller ground footprint.
   double gt_min_shared = 0.25;
 
   std::size_t tile_cache = 256;  // texture tiles kept (64 KiB each)
 };
+
+// The options of a scene with its own camera: for "ground", SyntheticOptions' defaults; for
+// "corridor" and "street", a walker's forward-looking camera (1.5 m up, pitched 6 degrees down,
+// a small sway) on a single_pass walk, in a corridor 2.4 m wide and 2.6 m high, or on the
+// pavement of a street 12 m wide between facades 10 m high. Throws placedb::Error
+// (kInvalidArgument) for an unknown scene.
+SyntheticOptions sceneDefaults(const std::string& scene);
 
 class SyntheticSequence {
  public:
@@ -85,6 +107,8 @@ class SyntheticSequence {
   int size() const { return static_cast<int>(poses_.size()); }
   const SyntheticOptions& options() const { return options_; }
   const CameraIntrinsics& camera() const { return camera_; }
+  // The corridor or street of a canyon scene; null in the ground scene.
+  const CanyonWorld* canyon() const { return canyon_.get(); }
 
   // Frame i as 8-bit grey, width x height. Thread-safe (the tile cache is locked).
   cv::Mat render(int i) const;
@@ -92,8 +116,10 @@ class SyntheticSequence {
   cv::Mat renderClean(int i) const;
 
   Pose pose(int i) const;
+  // The ground seen by frame i, and the map from the pixels of frame `from` to those of frame
+  // `to` (exact: that world is a plane). Ground scene only: a canyon's forward-looking camera
+  // sees an unbounded stretch of floor and more than one plane (kInvalidArgument).
   std::array<cv::Point2d, 4> footprint(int i) const;
-  // Maps pixels of frame `from` to pixels of frame `to` (exact: the world is a plane).
   cv::Matx33d homography(int from, int to) const;
 
   // (q, r) with q > r: frame q revisits the place of frame r. Sorted by q then r.
@@ -105,6 +131,7 @@ class SyntheticSequence {
 
  private:
   const Pose& checkedPose(int i) const;
+  void requireGround(const char* what) const;
 
   SyntheticOptions options_;
   CameraIntrinsics camera_;
@@ -113,6 +140,7 @@ class SyntheticSequence {
   std::vector<std::size_t> first_pair_;  // pairs_ of frame q are [first_pair_[q], first_pair_[q+1])
   std::unique_ptr<GroundTexture> texture_;
   std::vector<Decal> decals_;
+  std::unique_ptr<CanyonWorld> canyon_;
   cv::Mat ramp_x_, ramp_y_;  // -0.5..0.5 across the image, for light gradients
 };
 
