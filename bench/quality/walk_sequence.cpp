@@ -14,15 +14,29 @@
 // A low camera looking ahead (--camera-height 1.5 --pitch 30) sees the ground to 12 m, as a
 // hand-held camera sees a corridor or a pavement; bench/quality/offsets.py reads the two files.
 //
-// Usage: placedb_walk_sequence OUT [--frames N] [--width W] [--height H] [--speed M]
-//                              [--seed S] [--hfov DEG] [--pitch DEG] [--camera-height M]
-//                              [--profile demo|single_pass] [--lookalike none|poster|corridor]
-//                              [--lookalike-gap FRAMES] [--lookalike-pitch M]
-//                              [--ground-contrast C]
+// Usage: placedb_walk_sequence OUT [--scene ground|corridor|street] [--frames N] [--width W]
+//                              [--height H] [--speed M] [--seed S] [--hfov DEG] [--pitch DEG]
+//                              [--camera-height M] [--profile demo|single_pass]
+//                              [--lookalike none|poster|corridor] [--lookalike-gap FRAMES]
+//                              [--lookalike-pitch M] [--ground-contrast C]
+//                              [--canyon-half-width M] [--canyon-height M] [--canyon-offset M]
 //
 // With --profile single_pass the walk never comes back (gt_pairs.txt is empty) and a lookalike
 // (synthetic/lookalikes.h) puts one object at two places or a motif along a corridor: the
 // negative checks of bench/quality/precision.py, where every accepted closure is false.
+//
+// --scene corridor or street (synthetic/canyon.h) walks a single pass down a corridor or a
+// street with a forward-looking camera, the scene's own (sceneDefaults(): 1.5 m up, pitched
+// 6 degrees down, 60 degrees wide) unless the flags say otherwise; the lookalikes stand upright
+// on its walls. gt_pairs.txt and gt_nearest.txt are empty there, poses.txt is written as ever.
+//
+// Issue 45's negative walks (placedb_walk_sequence OUT and these flags): a corridor of doors and
+// lockers and a street with one poster at two places, at 960x540 as a phone sees them and at
+// 160x120 as a small wide-angle robot camera does.
+//   --frames 200 --scene corridor --lookalike corridor
+//   --frames 200 --scene corridor --lookalike corridor --width 160 --height 120 --hfov 95
+//   --frames 200 --scene street --lookalike poster
+//   --frames 200 --scene street --lookalike poster --width 160 --height 120 --hfov 95
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -44,12 +58,15 @@ using placedb::synthetic::SyntheticSequence;
 
 int usage() {
   std::fputs(
-      "usage: placedb_walk_sequence OUT [--frames N] [--width W] [--height H] [--speed M]\n"
-      "                             [--seed S] [--hfov DEG] [--pitch DEG] [--camera-height M]\n"
-      "                             [--profile demo|single_pass] [--lookalike "
-      "none|poster|corridor]\n"
+      "usage: placedb_walk_sequence OUT [--scene ground|corridor|street] [--frames N]\n"
+      "                             [--width W] [--height H] [--speed M] [--seed S]\n"
+      "                             [--hfov DEG] [--pitch DEG] [--camera-height M]\n"
+      "                             [--profile demo|single_pass]\n"
+      "                             [--lookalike none|poster|corridor]\n"
       "                             [--lookalike-gap FRAMES] [--lookalike-pitch M]\n"
-      "                             [--ground-contrast C]\n",
+      "                             [--ground-contrast C] [--canyon-half-width M]\n"
+      "                             [--canyon-height M] [--canyon-offset M]\n"
+      "corridor and street scenes walk a single pass with a forward-looking camera\n",
       stderr);
   return 2;
 }
@@ -81,8 +98,18 @@ std::vector<int> nearestPerPass(const SyntheticSequence& s, int q, const std::ve
 
 int main(int argc, char** argv) {
   if (argc < 2 || argc % 2 != 0) return usage();
+  // The scene first: its camera is the starting point the other flags change.
+  std::string scene = "ground";
+  for (int i = 2; i + 1 < argc; i += 2) {
+    if (std::string(argv[i]) == "--scene") scene = argv[i + 1];
+  }
   SyntheticOptions options;
-  options.profile = "demo";
+  try {
+    options = placedb::synthetic::sceneDefaults(scene);
+  } catch (const placedb::Error& e) {
+    std::fprintf(stderr, "placedb_walk_sequence: %s\n", e.what());
+    return 1;
+  }
   options.frames = 600;
   options.width = 960;
   options.height = 540;
@@ -91,7 +118,9 @@ int main(int argc, char** argv) {
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string key = argv[i];
     const char* value = argv[i + 1];
-    if (key == "--frames") {
+    if (key == "--scene") {
+      continue;
+    } else if (key == "--frames") {
       options.frames = std::atoi(value);
     } else if (key == "--width") {
       options.width = std::atoi(value);
@@ -117,6 +146,12 @@ int main(int argc, char** argv) {
       options.lookalike_pitch = std::atof(value);
     } else if (key == "--ground-contrast") {
       options.ground_contrast = std::atof(value);
+    } else if (key == "--canyon-half-width") {
+      options.canyon_half_width = std::atof(value);
+    } else if (key == "--canyon-height") {
+      options.canyon_height = std::atof(value);
+    } else if (key == "--canyon-offset") {
+      options.canyon_walk_offset = std::atof(value);
     } else {
       return usage();
     }
