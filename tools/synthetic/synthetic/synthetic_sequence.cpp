@@ -173,6 +173,11 @@ SyntheticOptions sceneDefaults(const std::string& scene) {
   // A walker's sway: a little across the way and up and down, the heading and pitch as before.
   o.lateral_wander = scene == "street" ? 0.4 : 0.2;
   o.height_wander = 0.05;
+  // A door and its lockers (2.8 m of wall) every 6 m, as along a corridor of offices: 3 m of wall
+  // between them shows the place. At 3 m they cover the walls, and at 960x540 every frame of the
+  // walk is then most like its first: the engine never leaves its first location, so a negative
+  // check there could never fail.
+  o.lookalike_pitch = 6;
   if (scene == "street") {
     o.canyon_half_width = 6;
     o.canyon_height = 10;

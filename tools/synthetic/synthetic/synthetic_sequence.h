@@ -92,8 +92,8 @@ struct SyntheticOptions {
 // The options of a scene with its own camera: for "ground", SyntheticOptions' defaults; for
 // "corridor" and "street", a walker's forward-looking camera (1.5 m up, pitched 6 degrees down,
 // a small sway) on a single_pass walk, in a corridor 2.4 m wide and 2.6 m high, or on the
-// pavement of a street 12 m wide between facades 10 m high. Throws placedb::Error
-// (kInvalidArgument) for an unknown scene.
+// pavement of a street 12 m wide between facades 10 m high; look-alikes repeat every 6 m. Throws
+// placedb::Error (kInvalidArgument) for an unknown scene.
 SyntheticOptions sceneDefaults(const std::string& scene);
 
 class SyntheticSequence {
