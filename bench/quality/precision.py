@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Precision first: every dev set in full and cut before its first revisit, and synthetic walks
 that never revisit a place but hold look-alikes (one poster at two places, doors and lockers along
-a corridor), each with the defaults and with working memory capped. On the cuts and the walks
+a corridor; tools/synthetic), each with the defaults and with working memory capped. On the cuts and the walks
 every accepted closure is false; the table lists them. The full runs are scored by the reference
 scorer at window 10 (R@100P, accepted true/false).
 
@@ -30,16 +30,23 @@ SETS = {
     'samples': ('rtabmap_samples', 'frames.txt', 'gt_pairs.txt'),
 }
 
-# name: placedb_walk_sequence arguments. A walk 0.5 m a frame that never comes back; the small
-# camera looks further down (its field of view is taller for the same width).
-WALK = ['--frames', '200', '--speed', '0.5', '--camera-height', '1.5', '--profile', 'single_pass']
-SMALL = ['--width', '160', '--height', '120', '--pitch', '40']
-LARGE = ['--width', '960', '--height', '540', '--pitch', '30']
+# name: placedb_walk_sequence arguments. Walks that never come back: 200 frames past one poster
+# at two places 48 frames apart (on the pavement of the ground world, on a facade of the street),
+# and along a corridor whose doors and lockers repeat every 6 m; a small camera (160x120, a
+# 95-degree lens in the canyon scenes) and a large one (960x540).
+GROUND = ['--frames', '200', '--speed', '0.5', '--camera-height', '1.5', '--profile',
+          'single_pass', '--lookalike', 'poster']
+CANYON = ['--frames', '200']
+SMALL = ['--width', '160', '--height', '120']
 WALKS = {
-    'poster_960x540': WALK + LARGE + ['--lookalike', 'poster'],
-    'poster_160x120': WALK + SMALL + ['--lookalike', 'poster'],
-    'corridor_960x540': WALK + LARGE + ['--lookalike', 'corridor', '--ground-contrast', '0.35'],
-    'corridor_160x120': WALK + SMALL + ['--lookalike', 'corridor', '--ground-contrast', '0.35'],
+    'poster_ground_960x540': GROUND + ['--width', '960', '--height', '540', '--pitch', '30'],
+    'poster_ground_160x120': GROUND + SMALL + ['--pitch', '40'],
+    'poster_street_960x540': CANYON + ['--scene', 'street', '--lookalike', 'poster'],
+    'poster_street_160x120': CANYON + SMALL + ['--hfov', '95', '--scene', 'street', '--lookalike',
+                                               'poster'],
+    'corridor_960x540': CANYON + ['--scene', 'corridor', '--lookalike', 'corridor'],
+    'corridor_160x120': CANYON + SMALL + ['--hfov', '95', '--scene', 'corridor', '--lookalike',
+                                          'corridor'],
 }
 
 

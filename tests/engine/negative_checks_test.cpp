@@ -1,5 +1,5 @@
 // Where a map must accept nothing: walks that never come back to a place. Each dev set cut before
-// its first revisit, and a synthetic walk past one poster that stands at two places, with the
+// its first revisit, and synthetic walks past one poster that stands at two places, with the
 // defaults and with working memory capped. Every closure accepted there is false, and one false
 // closure breaks a SLAM back end's map, so each test fails on the first one and names it.
 // bench/quality/precision.py runs the full cuts and the larger synthetic walks.
@@ -68,17 +68,23 @@ INSTANTIATE_TEST_SUITE_P(BeforeTheFirstRevisit, DevSetCut,
                                            Cut{"lip6_outdoor", 460}),
                          [](const auto& info) { return std::string(info.param.dataset); });
 
+struct Camera {
+  int width, height;
+  double pitch_degrees;  // the small camera looks further down: its view is taller
+};
+
+class LookalikeWalk : public ::testing::TestWithParam<Camera> {};
+
 // A walk that never comes back, 0.5 m a frame, past one A0 poster laid at two places 48 frames
-// apart (synthetic/lookalikes.h), seen by a small camera: everything else in the two views
-// differs.
-TEST(LookalikeWalk, OnePosterAtTwoPlacesIsNotAPlace) {
+// apart (synthetic/lookalikes.h): everything else in the two views differs.
+TEST_P(LookalikeWalk, OnePosterAtTwoPlacesIsNotAPlace) {
   synthetic::SyntheticOptions o;
   o.profile = "single_pass";
   o.lookalike = "poster";
   o.frames = 200;
-  o.width = 160;
-  o.height = 120;
-  o.pitch_degrees = 40;
+  o.width = GetParam().width;
+  o.height = GetParam().height;
+  o.pitch_degrees = GetParam().pitch_degrees;
   o.camera_height = 1.5;
   o.speed = 0.5;
   const synthetic::SyntheticSequence walk(o);
@@ -89,6 +95,13 @@ TEST(LookalikeWalk, OnePosterAtTwoPlacesIsNotAPlace) {
   EXPECT_EQ(acceptedClosures(images, "poster_walk_capped", capped(30)), std::vector<std::string>())
       << "wm_max=30";
 }
+
+INSTANTIATE_TEST_SUITE_P(SmallAndLargeCamera, LookalikeWalk,
+                         ::testing::Values(Camera{160, 120, 40}, Camera{960, 540, 30}),
+                         [](const auto& info) {
+                           return std::to_string(info.param.width) + "x" +
+                                  std::to_string(info.param.height);
+                         });
 
 }  // namespace
 }  // namespace placedb::testing

@@ -91,8 +91,8 @@ struct Options {
   int hypothesis_radius = 3;       // WM locations this many links from the filter's best
                                    // hypothesis compete with it; the check picks among them
   int hypothesis_top_similar = 5;  // ... and so do this many most similar WM locations
-  GeometryRule geometry_rule = GeometryRule::kEither;  // how the epipolar check
-                                                       // decides (geometric_check.h)
+  GeometryRule geometry_rule = GeometryRule::kNfa;  // how the epipolar check decides
+                                                    // (geometric_check.h)
   int geometry_min_inliers = 13;       // inliers rule: pairs one fundamental matrix must put
                                        // within geometry_max_error_px; 0 = no check
   double geometry_max_nfa = 0.001;     // nfa rule: a contrario number of false alarms at most;
