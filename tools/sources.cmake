@@ -34,6 +34,7 @@ add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_eval.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_demo.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/graph_export.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/pose_track.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_export.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_copy.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_argument.cpp
