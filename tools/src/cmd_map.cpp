@@ -87,7 +87,7 @@ Command addMapCommand(CLI::App& parent) {
       "appended to only by a resume of the session that wrote it (another run is exit 2),\n"
       "after the rows of frames the map lost (and maps again) are cut off. Its columns:\n" +
       logColumnList() +
-      "\nwhat each holds, and how closures onto other sessions' frames show: docs/log.md.\n"
+      "\nWhat each holds, and how closures onto other sessions' frames show: docs/log.md.\n"
       "Frames are named SESSION:INDEX, with @SECONDS.NANOSECONDS when the source stamps them.\n\n"
       "Examples:\n"
       "  placedb map run.placedb /data/lip6_outdoor/frames.txt --log run.csv\n"
