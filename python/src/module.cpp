@@ -372,12 +372,14 @@ std::string pathOf(PyMap& self) {
 }
 
 void bindMap(py::module_& m) {
-  py::class_<PyMap>(m, "Map",
-                    "A placedb map file: Map(path, settings=None, read_only=False). read_only "
-                    "opens it for queries and never changes the file. One Map may be shared "
-                    "between threads: its calls run one at a time, and close() waits for the "
-                    "call in flight. To localise against a map being built, open a second, "
-                    "read-only Map on the same file.")
+  py::class_<PyMap>(
+      m, "Map",
+      "A placedb map file: Map(path, settings=None, read_only=False). read_only "
+      "opens it for queries and never changes the file; without settings it "
+      "takes the map's last session's, as `placedb query` does. One Map may be shared "
+      "between threads: its calls run one at a time, and close() waits for the "
+      "call in flight. To localise against a map being built, open a second, "
+      "read-only Map on the same file.")
       .def(py::init<const std::string&, const std::optional<py::dict>&, bool>(), py::arg("path"),
            py::arg("settings") = py::none(), py::arg("read_only") = false)
       .def("begin_session", &PyMap::beginSession, py::arg("source"),
