@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # Starts or stops a throwaway PostgreSQL server for placedb maps, all inside one folder.
 #
-#   scripts/pg-server.sh start DIR   # initdb into DIR/data, start it, create database "placedb",
-#                                    # print the map URI: postgresql:///placedb?host=DIR
+#   scripts/pg-server.sh start DIR [DB]  # initdb into DIR/data, start it (unless it runs), create
+#                                    # database DB (default placedb) and print the map URI:
+#                                    # postgresql:///DB?host=DIR&user=postgres
+#   scripts/pg-server.sh createdb DIR DB # a new, empty database DB on the server: print its URI
+#                                    # (exit 1 when DB exists: a map is copied into a new one)
 #   scripts/pg-server.sh stop DIR    # stop it (DIR stays; delete it to drop every map)
 #   scripts/pg-server.sh stop DIR immediate   # without a shutdown checkpoint, for a DIR about
 #                                    # to be deleted (a restart would recover it like a crash)
@@ -18,8 +21,12 @@
 set -euo pipefail
 
 usage() {
-  echo "usage: $0 start [DIR] | stop DIR | uri DIR" >&2
+  echo "usage: $0 start [DIR [DB]] | createdb DIR DB | stop DIR | uri DIR" >&2
   exit 2
+}
+
+uri_of() {
+  echo "postgresql:///$2?host=$(cd "$1" && pwd)&user=postgres"
 }
 
 # Debian keeps the server's programs in /usr/lib/postgresql/VERSION/bin, off PATH; PG_BIN
@@ -81,16 +88,30 @@ case "$command" in
       printf '%s\n' "local all postgres trust" "local all all scram-sha-256" \
         | as_owner tee "$dir/data/pg_hba.conf" >/dev/null
     fi
-    as_owner "$bin/pg_ctl" -D "$dir/data" -l "$dir/server.log" -w -t 60 \
-      -o "-c listen_addresses='' -c unix_socket_directories='$dir'" start \
-      >/dev/null || {
-      echo "pg-server: the server did not start; see $dir/server.log" >&2
+    # A server already running in DIR is used as it is: start may be run again.
+    if ! as_owner "$bin/pg_ctl" -D "$dir/data" status >/dev/null 2>&1; then
+      as_owner "$bin/pg_ctl" -D "$dir/data" -l "$dir/server.log" -w -t 60 \
+        -o "-c listen_addresses='' -c unix_socket_directories='$dir'" start \
+        >/dev/null || {
+        echo "pg-server: the server did not start; see $dir/server.log" >&2
+        exit 1
+      }
+    fi
+    db=${3:-placedb}
+    # createdb fails when the database exists (a restart): that is fine.
+    as_owner "$bin/createdb" -h "$dir" "$db" 2>/dev/null || true
+    # Any local user may connect as postgres (trust on the socket, which only this machine sees).
+    uri_of "$dir" "$db"
+    ;;
+  createdb)
+    [[ -n "$dir" && -n "${3:-}" ]] || usage
+    bin=$(find_bin)
+    as_owner "$bin/createdb" -h "$(cd "$dir" && pwd)" "$3" >&2 || {
+      echo "pg-server: could not create database $3 on the server in $dir (it exists, or the" \
+        "server is not running: start it first)" >&2
       exit 1
     }
-    # createdb fails when the database exists (a restart): that is fine.
-    as_owner "$bin/createdb" -h "$dir" placedb 2>/dev/null || true
-    # Any local user may connect as postgres (trust on the socket, which only this machine sees).
-    echo "postgresql:///placedb?host=$dir&user=postgres"
+    uri_of "$dir" "$3"
     ;;
   stop)
     [[ -n "$dir" ]] || usage
@@ -101,7 +122,7 @@ case "$command" in
     ;;
   uri)
     [[ -n "$dir" ]] || usage
-    echo "postgresql:///placedb?host=$(cd "$dir" && pwd)&user=postgres"
+    uri_of "$dir" placedb
     ;;
   *)
     usage

@@ -16,6 +16,7 @@ add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/settings_input.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/calibration_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/frame_log.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/frame_names.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/progress.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/eval.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/plots.cpp
@@ -33,6 +34,7 @@ add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_eval.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_demo.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/graph_export.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/pose_track.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_export.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/cmd_copy.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_argument.cpp

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "errors.h"
+#include "frame_names.h"
 #include "image_source.h"
 #include "images.h"
 #include "map_rows.h"
@@ -49,6 +50,20 @@ py::object jsonToPython(const nlohmann::json& value) {
   return py::module_::import("json").attr("loads")(value.dump());
 }
 
+// A read-only map opened without settings takes its last session's, as `placedb query` does:
+// features extracted as they were mapped, and the camera's intrinsics for the poses of matches.
+Options openingOptions(const std::string& path, const std::optional<py::dict>& settings,
+                       bool read_only) {
+  if (read_only && !settings) {
+    try {
+      if (auto stored = cli::lastSessionOptions(path)) return *stored;
+    } catch (const Error&) {
+      // A map that cannot be read this way: Map::open says why.
+    }
+  }
+  return optionsOf(settings);
+}
+
 // A map as Python holds it: closing is explicit (close(), or leaving a `with` block) and any
 // use afterwards is refused instead of reaching a closed engine.
 //
@@ -59,7 +74,7 @@ py::object jsonToPython(const nlohmann::json& value) {
 class PyMap {
  public:
   PyMap(const std::string& path, const std::optional<py::dict>& settings, bool read_only)
-      : map_(Map::open(path, optionsOf(settings),
+      : map_(Map::open(path, openingOptions(path, settings, read_only),
                        read_only ? Map::Mode::kLocalisation : Map::Mode::kMapping)) {}
 
   // Runs `call` on the open map, the GIL released and the mutex held.
@@ -179,14 +194,36 @@ std::size_t importVocabulary(const std::string& file, const std::string& map_pat
   return static_cast<std::size_t>(cli::inspectMap(map_path)["words"].get<std::int64_t>());
 }
 
-// A relative pose as Python sees it: the quaternion in x, y, z, w order, as everywhere else.
-py::object poseDict(const std::optional<storage::ClosurePose>& pose) {
+// A relative pose as Python sees it, under the names of `placedb query --json`: the quaternion
+// in x, y, z, w order, as everywhere else, and the frame whose camera it is relative to (the
+// location's first frame, map.h).
+py::object poseDict(const std::optional<storage::ClosurePose>& pose,
+                    const std::vector<FrameRef>& frames) {
   if (!pose) return py::none();
   py::dict d;
-  d["rotation"] = py::make_tuple(pose->qx, pose->qy, pose->qz, pose->qw);
+  d["rotation_xyzw"] = py::make_tuple(pose->qx, pose->qy, pose->qz, pose->qw);
   d["translation"] = py::make_tuple(pose->tx, pose->ty, pose->tz);
   d["inliers"] = pose->inliers;
+  d["relative_to"] = frames.empty() ? py::object(py::none()) : py::cast(frames.front());
   return std::move(d);
+}
+
+std::string optionalText(const std::optional<std::int64_t>& value) {
+  return value ? std::to_string(*value) : "None";
+}
+
+// Python's repr of a str: quotes and escapes as Python would write them.
+std::string pyRepr(const std::string& text) { return py::repr(py::str(text)); }
+
+std::string frameRepr(const FrameRef& f) {
+  return fmt::format("FrameRef(session={}, index={}, stamp_ns={}, path={})", f.session_id,
+                     f.source_index, optionalText(f.stamp_ns), pyRepr(f.source_path));
+}
+
+std::string framesRepr(const std::vector<FrameRef>& frames) {
+  std::string text;
+  for (const auto& f : frames) text += (text.empty() ? "" : ", ") + cli::frameName(f);
+  return "[" + text + "]";
 }
 
 void bindResults(py::module_& m) {
@@ -195,10 +232,10 @@ void bindResults(py::module_& m) {
       .def_readonly("session_id", &FrameRef::session_id)
       .def_readonly("source_index", &FrameRef::source_index)
       .def_readonly("source_path", &FrameRef::source_path)
-      .def("__repr__", [](const FrameRef& f) {
-        return fmt::format("FrameRef(session={}, index={}, path='{}')", f.session_id,
-                           f.source_index, f.source_path);
-      });
+      .def_readonly("stamp_ns", &FrameRef::stamp_ns,
+                    "the source's stamp of the frame (a bag message's header.stamp, ns since the "
+                    "epoch, or the stamp_ns given to process()); None without one")
+      .def("__repr__", &frameRepr);
   py::class_<Hypothesis>(m, "Hypothesis", "The filter's best loop-closure candidate")
       .def_readonly("location_id", &Hypothesis::location_id, "0: no hypothesis")
       .def_readonly("frames", &Hypothesis::frames)
@@ -209,10 +246,17 @@ void bindResults(py::module_& m) {
       .def_readonly("inliers", &Hypothesis::inliers, "geometric check inliers, 0: no check")
       .def_readonly("matches", &Hypothesis::matches)
       .def_property_readonly(
-          "pose", [](const Hypothesis& h) { return poseDict(h.pose); },
+          "pose", [](const Hypothesis& h) { return poseDict(h.pose, h.frames); },
           "an accepted closure's relative pose when the map has intrinsics (fx fy cx cy): "
-          "{'rotation': (qx, qy, qz, qw), 'translation': unit (tx, ty, tz), 'inliers': n} "
-          "(quaternion x, y, z, w, as ROS and Eigen order it); None otherwise");
+          "{'rotation_xyzw': (qx, qy, qz, qw), 'translation': unit (tx, ty, tz), 'inliers': n, "
+          "'relative_to': the FrameRef of the location's first frame, whose camera it is in} "
+          "(quaternion x, y, z, w, as ROS and Eigen order it); None otherwise")
+      .def("__repr__", [](const Hypothesis& h) {
+        return fmt::format(
+            "Hypothesis(location={}, frames={}, score={:.3f}, accepted={}, inliers={}{})",
+            h.location_id, framesRepr(h.frames), h.score, h.accepted ? "True" : "False", h.inliers,
+            h.accepted ? std::string() : ", rejected_reason=" + pyRepr(h.rejected_reason));
+      });
   py::class_<StageTimes>(m, "StageTimes", "Milliseconds per stage")
       .def_readonly("features", &StageTimes::features)
       .def_readonly("quantisation", &StageTimes::quantisation)
@@ -220,7 +264,13 @@ void bindResults(py::module_& m) {
       .def_readonly("filter", &StageTimes::filter)
       .def_readonly("memory", &StageTimes::memory)
       .def_readonly("storage", &StageTimes::storage)
-      .def_readonly("total", &StageTimes::total);
+      .def_readonly("total", &StageTimes::total)
+      .def("__repr__", [](const StageTimes& t) {
+        return fmt::format(
+            "StageTimes(total={:.2f}, features={:.2f}, quantisation={:.2f}, likelihood={:.2f}, "
+            "filter={:.2f}, memory={:.2f}, storage={:.2f})",
+            t.total, t.features, t.quantisation, t.likelihood, t.filter, t.memory, t.storage);
+      });
   py::class_<FrameResult>(m, "FrameResult", "What process() did with one image")
       .def_readonly("frame_id", &FrameResult::frame_id)
       .def_readonly("session_id", &FrameResult::session_id)
@@ -244,10 +294,14 @@ void bindResults(py::module_& m) {
       .def_readonly("transferred", &FrameResult::transferred)
       .def_readonly("retrieved", &FrameResult::retrieved)
       .def_readonly("mean_quantisation_error", &FrameResult::mean_quantisation_error)
+      .def_readonly("stamp_ns", &FrameResult::stamp_ns)
       .def("__repr__", [](const FrameResult& r) {
-        return fmt::format("FrameResult(index={}, outcome={}, score={:.3f}, accepted={})",
-                           r.source_index, outcomeName(r.outcome), r.hypothesis.score,
-                           r.hypothesis.accepted ? "True" : "False");
+        return fmt::format(
+            "FrameResult(frame={}, outcome={}, location={}, score={:.3f}, accepted={}, "
+            "matched_frames={})",
+            cli::frameName(r.session_id, r.source_index, r.stamp_ns),
+            pyRepr(outcomeName(r.outcome)), r.location_id, r.hypothesis.score,
+            r.hypothesis.accepted ? "True" : "False", framesRepr(r.hypothesis.frames));
       });
   py::class_<SessionInfo>(m, "SessionInfo")
       .def_readonly("id", &SessionInfo::id)
@@ -256,7 +310,14 @@ void bindResults(py::module_& m) {
       .def_readonly("ended_at", &SessionInfo::ended_at)
       .def_readonly("clean_close", &SessionInfo::clean_close)
       .def_readonly("frames", &SessionInfo::frames)
-      .def_readonly("last_source_index", &SessionInfo::last_source_index);
+      .def_readonly("last_source_index", &SessionInfo::last_source_index)
+      .def("__repr__", [](const SessionInfo& i) {
+        return fmt::format(
+            "SessionInfo(id={}, source={}, frames={}, last_source_index={}, started_at={}, "
+            "ended_at={}, clean_close={})",
+            i.id, pyRepr(i.source), i.frames, optionalText(i.last_source_index),
+            pyRepr(i.started_at), pyRepr(i.ended_at), i.clean_close ? "True" : "False");
+      });
   // What `placedb query --json` holds, under the same names.
   py::class_<QueryMatch>(m, "QueryMatch")
       .def_readonly("location_id", &QueryMatch::location_id)
@@ -269,9 +330,20 @@ void bindResults(py::module_& m) {
       .def_readonly("verified", &QueryMatch::verified, "the geometric check passed")
       .def_readonly("frames", &QueryMatch::frames)
       .def_property_readonly(
-          "pose", [](const QueryMatch& q) { return poseDict(q.pose); },
-          "a verified match's relative pose (the query's camera in the location's) when the map "
-          "and the location's session have intrinsics, as Hypothesis.pose; None otherwise");
+          "pose", [](const QueryMatch& q) { return poseDict(q.pose, q.frames); },
+          "a verified match's relative pose (the query's camera in that of the location's first "
+          "frame, relative_to) when the map and the location's session have intrinsics, as "
+          "Hypothesis.pose; None otherwise (no_pose_reason says why for a verified match)")
+      .def_readonly("no_pose_reason", &QueryMatch::no_pose_reason,
+                    "why a verified match has no pose; empty otherwise")
+      .def("__repr__", [](const QueryMatch& q) {
+        return fmt::format(
+            "QueryMatch(location={}, tier={}, verified={}, inliers={}, code_similarity={:.3f}, "
+            "frames={}, pose={})",
+            q.location_id, storage::toString(q.tier), q.verified ? "True" : "False", q.inliers,
+            q.code_similarity, framesRepr(q.frames),
+            q.pose ? "{...}" : (q.verified ? "None: " + q.no_pose_reason : std::string("None")));
+      });
   py::class_<QueryResult>(m, "QueryResult")
       .def_property_readonly(
           "verdict", [](const QueryResult& r) { return std::string(toString(r.verdict)); },
@@ -281,7 +353,18 @@ void bindResults(py::module_& m) {
       .def_readonly("matches", &QueryResult::matches, "best first: verified ones by inliers")
       .def_readonly("searched", &QueryResult::searched, "locations compared, all tiers")
       .def_readonly("checked", &QueryResult::checked, "candidates the geometric check ran on")
-      .def_readonly("time_ms", &QueryResult::time_ms);
+      .def_readonly("time_ms", &QueryResult::time_ms)
+      .def("__repr__", [](const QueryResult& r) {
+        std::string best = "None";
+        if (!r.matches.empty())
+          best = fmt::format("location {} {}", r.matches.front().location_id,
+                             framesRepr(r.matches.front().frames));
+        return fmt::format(
+            "QueryResult(verdict={}, matches={}, best={}, searched={}, checked={}, "
+            "feature_count={}, time_ms={:.1f})",
+            pyRepr(toString(r.verdict)), r.matches.size(), best, r.searched, r.checked,
+            r.feature_count, r.time_ms);
+      });
 }
 
 std::string pathOf(PyMap& self) {
@@ -289,12 +372,14 @@ std::string pathOf(PyMap& self) {
 }
 
 void bindMap(py::module_& m) {
-  py::class_<PyMap>(m, "Map",
-                    "A placedb map file: Map(path, settings=None, read_only=False). read_only "
-                    "opens it for queries and never changes the file. One Map may be shared "
-                    "between threads: its calls run one at a time, and close() waits for the "
-                    "call in flight. To localise against a map being built, open a second, "
-                    "read-only Map on the same file.")
+  py::class_<PyMap>(
+      m, "Map",
+      "A placedb map file: Map(path, settings=None, read_only=False). read_only "
+      "opens it for queries and never changes the file; without settings it "
+      "takes the map's last session's, as `placedb query` does. One Map may be shared "
+      "between threads: its calls run one at a time, and close() waits for the "
+      "call in flight. To localise against a map being built, open a second, "
+      "read-only Map on the same file.")
       .def(py::init<const std::string&, const std::optional<py::dict>&, bool>(), py::arg("path"),
            py::arg("settings") = py::none(), py::arg("read_only") = false)
       .def("begin_session", &PyMap::beginSession, py::arg("source"),

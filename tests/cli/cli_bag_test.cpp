@@ -8,6 +8,7 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <regex>
 
 #include "cli_map_edits.h"
 #include "cli_scratch.h"
@@ -254,10 +255,22 @@ TEST(CliBags, Ros2BagMapsAsTheListFileDoesAndResumes) {
     auto first = args;
     first.insert(first.end(), {"--stop-after", "50", "--topic", "/camera/image"});
     ASSERT_EQ(placedb(first, dir).exit_code, 0);
+    args.erase(args.begin() + 3);  // without -q: the closure lines
     const auto r = placedb(args, dir);
     ASSERT_EQ(r.exit_code, 0) << encoding << ": " << describe(r);
     expectSameDecisions(expected, log);
     expectStamps(log);
+    // Each closure line names its frames with their stamps (SESSION:INDEX@SECONDS).
+    const std::regex stamped(
+        "placedb: frame 1:[0-9]+@[0-9]+\\.[0-9]{9} closes a loop on "
+        "frames? 1:[0-9]+@[0-9]+\\.[0-9]{9}( 1:[0-9]+@[0-9]+\\.[0-9]{9})* .*");
+    int closure_lines = 0;
+    for (const auto& line : lines(r.err))
+      if (line.find("closes a loop") != std::string::npos) {
+        ++closure_lines;
+        EXPECT_TRUE(std::regex_match(line, stamped)) << line;
+      }
+    EXPECT_GT(closure_lines, 0) << r.err;
     // The stamps travel with the graph too: one per frame a location stands for.
     const auto csv = dir / (encoding + "_graph");
     ASSERT_EQ(placedb({"export", map.string(), csv.string(), "--format", "csv"}, dir).exit_code, 0);

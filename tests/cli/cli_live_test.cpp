@@ -109,8 +109,17 @@ TEST(CliLive, UnreachableStreamAndMisplacedOptionsAreOneLine) {
   auto seq = smallSequence(3);
   auto dir = scratchDir("CliLive_refused");
   const auto map = (dir / "m.placedb").string();
-  expectCleanError(placedb({"map", map, "http://127.0.0.1:9/none.mjpg"}, dir), 3,
-                   "http://127.0.0.1:9/none.mjpg");
+  const auto stream = placedb({"map", map, "http://127.0.0.1:9/none.mjpg"}, dir);
+  expectCleanError(stream, 3, "http://127.0.0.1:9/none.mjpg");
+  EXPECT_NE(stream.err.find("FFmpeg could not open it"), std::string::npos) << stream.err;
+  // A camera that is not there: the device tried, and the cameras there are.
+  const auto camera = placedb({"map", map, "camera:99"}, dir);
+  expectCleanError(camera, 3, "cannot open live source camera:99: ");
+  EXPECT_TRUE(camera.err.find("/dev/video99 does not exist (V4L2 devices here: ") !=
+                  std::string::npos ||
+              camera.err.find("no V4L2 backend") != std::string::npos)
+      << camera.err;
+  EXPECT_EQ(lines(camera.err).size(), 1u) << camera.err;
   expectCleanError(placedb({"map", map, (seq / "frames.txt").string(), "--fps", "5"}, dir), 2,
                    "--fps");
   EXPECT_FALSE(fs::exists(map));

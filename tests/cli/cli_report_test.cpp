@@ -99,7 +99,8 @@ TEST_F(ReportTest, ThumbnailsOfTheLogsSession) {
 }
 
 // Without ground truth: exit 0, the closures shown without a verdict, no figure that would call
-// them right or wrong.
+// them right or wrong, and the figures that need none: the score per frame and the matrix of the
+// accepted closures, both with every closure in one colour (issue #50).
 TEST_F(ReportTest, WithoutGroundTruthTheClosuresAreShownUnjudged) {
   const fs::path out = dir_ / "unjudged";
   auto r = placedb({"report", map_.string(), log_.string(), "--out", out.string()}, dir_);
@@ -114,8 +115,12 @@ TEST_F(ReportTest, WithoutGroundTruthTheClosuresAreShownUnjudged) {
   EXPECT_EQ(countOf(page, "pair wrong"), 0u);
   EXPECT_EQ(countOf(page, "pair right"), 0u);
   EXPECT_EQ(page.find("precision_recall.png"), std::string::npos);
-  EXPECT_EQ(page.find("loop_matrix.png"), std::string::npos);
   EXPECT_NE(page.find("time_by_stage.png"), std::string::npos);
+  EXPECT_NE(page.find("score.png"), std::string::npos);
+  EXPECT_NE(page.find("no ground truth"), std::string::npos);
+  // The matrix: one yellow pixel per accepted closure (none white, green or red).
+  EXPECT_NE(page.find("loop_matrix.png"), std::string::npos);
+  EXPECT_NE(page.find("in yellow"), std::string::npos);
   EXPECT_EQ(countOf(page, "class=\"missing\""), 0u);
 }
 

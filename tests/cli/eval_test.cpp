@@ -239,6 +239,24 @@ TEST(LoopMatrix, MarksMissedRightAndWrongPairs) {
   EXPECT_EQ(image.at<cv::Vec3b>(0, 0), cv::Vec3b(0, 0, 0));
 }
 
+// Without ground truth the matrix holds the accepted closures alone, one colour, no verdict.
+TEST(LoopMatrix, WithoutGroundTruthShowsTheAcceptedClosuresUnjudged) {
+  Evaluation eval;
+  for (std::int64_t f = 0; f < 10; ++f) eval.frames.push_back({f, {}, 0, false, false, {}});
+  eval.frames[8] = {8, {1, 2}, 0.9, true, false, {}};
+  eval.frames[9] = {9, {5}, 0.3, false, false, {}};  // not accepted: not drawn
+  const auto dir = scratchDir("LoopMatrix_unjudged");
+  const WrittenPlot plot = writeLoopMatrix(eval, {}, dir, /*judged=*/false);
+  EXPECT_NE(plot.what.find("no ground truth"), std::string::npos) << plot.what;
+  const cv::Mat image = cv::imread((dir / plot.file).string(), cv::IMREAD_COLOR);
+  ASSERT_EQ(image.size(), cv::Size(10, 10));
+  const cv::Vec3b yellow(0, 220, 255), black(0, 0, 0);
+  EXPECT_EQ(image.at<cv::Vec3b>(8, 1), yellow);
+  EXPECT_EQ(image.at<cv::Vec3b>(8, 2), yellow);
+  EXPECT_EQ(image.at<cv::Vec3b>(9, 5), black);
+  EXPECT_EQ(cv::countNonZero(image.reshape(1)), 4) << "two yellow pixels, nothing else";
+}
+
 // A long run is shrunk, and a wrong closure sharing a pixel with a right one stays visible.
 TEST(LoopMatrix, ShrinksLongRunsWithoutHidingWrongClosures) {
   Evaluation eval;

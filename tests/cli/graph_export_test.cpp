@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "placedb/error.h"
 #include "placedb/storage/sqlite_map_store.h"
 #include "test_paths.h"
 
@@ -121,6 +122,58 @@ TEST(GraphExport, PosesTravelAndTheOthersAreAppearanceOnly) {
   EXPECT_NE(graphml.find("edgedefault=\"directed\""), std::string::npos);
   EXPECT_NE(graphml.find("<node id=\"1\">"), std::string::npos);
   EXPECT_NE(graphml.find("<edge source=\"1\" target=\"4\">"), std::string::npos);
+}
+
+// A track of stamped poses: exact at a stamp, interpolated between two (position linearly,
+// rotation by slerp), nothing outside; `rostopic echo -p` columns read as they are.
+TEST(PoseTrack, InterpolatesBetweenStampsAndReadsRostopicColumns) {
+  const auto dir = placedb::testing::scratchDir("PoseTrack");
+  const double h = std::sqrt(0.5);  // 90 degrees about z at stamp 300
+  std::ofstream(dir / "odom.csv")
+      << "%time,field.header.seq,field.header.stamp,field.pose.pose.position.x,"
+         "field.pose.pose.position.y,field.pose.pose.position.z,field.pose.pose.orientation.x,"
+         "field.pose.pose.orientation.y,field.pose.pose.orientation.z,"
+         "field.pose.pose.orientation.w\n"
+      << "1,2,300,2,4,0,0,0," << h << "," << h << "\n"
+      << "1,1,100,0,0,0,0,0,0,1\n";
+  const PoseTrack track = readPoseCsv(dir / "odom.csv");
+  EXPECT_EQ(track.size(), 2u);
+  EXPECT_FALSE(track.at(99));
+  EXPECT_FALSE(track.at(301));
+  const auto exact = track.at(100);
+  ASSERT_TRUE(exact);
+  EXPECT_EQ(exact->position, (std::array<double, 3>{0, 0, 0}));
+  const auto half = track.at(200);
+  ASSERT_TRUE(half);
+  EXPECT_NEAR(half->position[0], 1, 1e-12);
+  EXPECT_NEAR(half->position[1], 2, 1e-12);
+  // Half of 90 degrees about z.
+  EXPECT_NEAR(half->rotation_xyzw[2], std::sin(M_PI / 8), 1e-12);
+  EXPECT_NEAR(half->rotation_xyzw[3], std::cos(M_PI / 8), 1e-12);
+
+  // b seen from a: a turned 90 degrees left at (2, 4) sees a point 1 ahead in x at (1, 0).
+  Pose3 a, b;
+  a.position = {2, 4, 0};
+  a.rotation_xyzw = {0, 0, h, h};
+  b.position = {2, 5, 0};
+  const Pose3 seen = between(a, b);
+  EXPECT_NEAR(seen.position[0], 1, 1e-12);
+  EXPECT_NEAR(seen.position[1], 0, 1e-12);
+  EXPECT_NEAR(seen.rotation_xyzw[2], -h, 1e-12);
+
+  std::ofstream(dir / "twice.csv")
+      << "stamp_ns,x,y,z,qx,qy,qz,qw\n5,0,0,0,0,0,0,1\n5,1,0,0,0,0,0,1\n";
+  EXPECT_THROW(readPoseCsv(dir / "twice.csv"), Error);
+  std::ofstream(dir / "text.csv") << "stamp_ns,x,y,z,qx,qy,qz,qw\n5,zero,0,0,0,0,0,1\n";
+  try {
+    readPoseCsv(dir / "text.csv");
+    ADD_FAILURE() << "a pose that is not a number was read";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("text.csv: row 2: x is not a number"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(readPoseCsv(dir / "absent.csv"), Error);
 }
 
 }  // namespace

@@ -139,17 +139,51 @@ def test_closures_carry_a_pose_only_with_intrinsics(tmp_path):
         for p in poses:
             if p is None:
                 continue
-            assert abs(sum(q * q for q in p["rotation"]) - 1.0) < 1e-6
+            assert abs(sum(q * q for q in p["rotation_xyzw"]) - 1.0) < 1e-6
             assert p["inliers"] >= 5
         # Seen again from the same place: x, y, z near 0 and w near 1 (x, y, z, w order).
         still = next(p for p in poses if p is not None)
-        assert len(still["rotation"]) == 4
+        assert len(still["rotation_xyzw"]) == 4
         # A query of a mapped image on a map with intrinsics answers with the pose too.
         with placedb.Map(path, read_only=True) as m:
             found = m.query(scene(3))
         assert found.verdict == "known"
         assert found.matches[0].pose is not None
-        assert abs(found.matches[0].pose["rotation"][3]) > 0.99
+        assert abs(found.matches[0].pose["rotation_xyzw"][3]) > 0.99
+        # The names of `placedb query --json`, and the frame the pose is relative to.
+        assert set(found.matches[0].pose) == {"rotation_xyzw", "translation", "inliers",
+                                              "relative_to"}
+        assert found.matches[0].pose["relative_to"].frame_id == \
+            found.matches[0].frames[0].frame_id
+
+
+def test_results_print_readably_and_carry_stamps(tmp_path):
+    path = str(tmp_path / "stamps.placedb")
+    stamp = 1_700_000_000_000_000_000
+    with placedb.Map(path) as m:
+        session = m.begin_session("tour")
+        assert "object at" not in repr(session)
+        assert repr(session).startswith("SessionInfo(id=1, source='tour'")
+        results = [m.process(scene(seed), stamp_ns=stamp + i * 100_000_000)
+                   for i, seed in enumerate(list(range(24)) + list(range(8)))]
+        assert "object at" not in repr(m.sessions())
+    accepted = [r for r in results if r.accepted]
+    assert accepted
+    for r in accepted:
+        for f in r.matched_frames:
+            assert f.stamp_ns == stamp + f.source_index * 100_000_000
+            assert f"stamp_ns={f.stamp_ns}" in repr(f)
+        assert "object at" not in repr(r.hypothesis)
+        assert "frames=[1:" in repr(r.hypothesis)
+    with placedb.Map(path, read_only=True) as m:
+        found = m.query(scene(3))
+    for shown in (found, found.matches[0], found.matches[0].frames[0]):
+        assert "object at" not in repr(shown), repr(shown)
+    assert repr(found).startswith("QueryResult(verdict='known'")
+    # A verified match without intrinsics has no pose, and says why.
+    assert found.matches[0].verified and found.matches[0].pose is None
+    assert "no camera intrinsics" in found.matches[0].no_pose_reason
+    assert found.matches[0].frames[0].stamp_ns is not None
 
 
 def test_vocabulary_export_and_import_both_formats(tmp_path):

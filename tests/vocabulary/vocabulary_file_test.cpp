@@ -11,6 +11,7 @@
 #include "error_code.h"
 #include "file_bytes.h"
 #include "placedb/error.h"
+#include "rtabmap_dictionary_loader.h"
 #include "test_paths.h"
 #include "vocabulary/vocabulary_file.h"
 
@@ -233,7 +234,7 @@ TEST_F(VocabularyFile, TextExportRoundTripsBitForBit) {
     std::istringstream fields(line);
     long long id = 0;
     fields >> id;
-    EXPECT_EQ(id, data_.ids[words]);
+    EXPECT_EQ(id, data_.ids[words] + 1) << "RTAB-Map's word ids start at 1";
     int values = 0;
     for (std::string value; fields >> value;) ++values;
     EXPECT_EQ(values, 8) << line;
@@ -241,12 +242,12 @@ TEST_F(VocabularyFile, TextExportRoundTripsBitForBit) {
   }
   EXPECT_EQ(words, data_.ids.size());
 
-  writeBytes(dir_ / "bad.txt", "0 1 2 3 4 5 6 7 8\n1 1 2 3\n");
+  writeBytes(dir_ / "bad.txt", "1 1 2 3 4 5 6 7 8\n2 1 2 3\n");
   std::string message;
   EXPECT_EQ(codeOf([&] { readVocabularyText(dir_ / "bad.txt"); }, &message),
             ErrorCode::kVocabularyRefused);
   EXPECT_NE(message.find("line 2"), std::string::npos) << message;
-  writeBytes(dir_ / "bad2.txt", "0 1 x\n");
+  writeBytes(dir_ / "bad2.txt", "1 1 x\n");
   EXPECT_EQ(codeOf([&] { readVocabularyText(dir_ / "bad2.txt"); }), ErrorCode::kVocabularyRefused);
 }
 
@@ -257,7 +258,7 @@ TEST_F(VocabularyFile, ReadsRtabmapDictionaryAndRefusesWrongHeaders) {
              "3.000000 \n");
   const VocabularyData words = readVocabularyText(dir_ / "rtabmap.txt");
   EXPECT_EQ(words.dim, 3);
-  EXPECT_EQ(words.ids, (std::vector<std::int64_t>{1, 2}));
+  EXPECT_EQ(words.ids, (std::vector<std::int64_t>{0, 1})) << "RTAB-Map's word 1 is placedb's 0";
   EXPECT_FLOAT_EQ(words.descriptors.at<float>(0, 1), -0.25f);
   EXPECT_FLOAT_EQ(words.descriptors.at<float>(1, 2), 3.0f);
 
@@ -280,6 +281,44 @@ TEST_F(VocabularyFile, ReadsRtabmapDictionaryAndRefusesWrongHeaders) {
   EXPECT_EQ(codeOf([&] { readVocabularyText(dir_ / "empty.txt"); }, &message),
             ErrorCode::kVocabularyRefused);
   EXPECT_NE(message.find("no word"), std::string::npos) << message;
+}
+
+// The export as RTAB-Map's own loader reads it (rtabmap_dictionary_loader.h): every word loads,
+// none with RTAB-Map's invalid id 0 (a fixed dictionary asserts its nearest word's id is above
+// 0), with exactly placedb's values; and the file still reads back into placedb's ids.
+TEST_F(VocabularyFile, TextExportIsWhatRtabmapLoads) {
+  ASSERT_EQ(data_.ids.front(), 0) << "the sample holds placedb's word 0";
+  const fs::path text = dir_ / "rtabmap_words.txt";
+  writeVocabularyText(text, data_);
+  const auto rtabmap = testing::loadRtabmapDictionary(text.string());
+  ASSERT_FALSE(rtabmap.refused);
+  EXPECT_EQ(rtabmap.dimension, data_.dim);
+  EXPECT_TRUE(rtabmap.skipped_lines.empty()) << rtabmap.skipped_lines.front();
+  EXPECT_EQ(rtabmap.invalid_ids, 0);
+  EXPECT_EQ(rtabmap.repeated_ids, 0);
+  ASSERT_EQ(rtabmap.words.size(), data_.ids.size());
+  for (std::size_t i = 0; i < data_.ids.size(); ++i) {
+    const auto word = rtabmap.words.find(static_cast<int>(data_.ids[i] + 1));
+    ASSERT_NE(word, rtabmap.words.end()) << "placedb word " << data_.ids[i];
+    ASSERT_EQ(word->second.size(), static_cast<std::size_t>(data_.dim));
+    EXPECT_EQ(std::memcmp(word->second.data(), data_.descriptors.ptr<float>(int(i)),
+                          4 * std::size_t(data_.dim)),
+              0)
+        << "word " << word->first << " reads back other values in RTAB-Map";
+  }
+  // ... and placedb reads it back exactly, ids included.
+  const VocabularyData back = readVocabularyText(text, data_.dim);
+  EXPECT_EQ(back.ids, data_.ids);
+  writeVocabularyText(dir_ / "again.txt", back);
+  EXPECT_EQ(readBytes(dir_ / "again.txt"), readBytes(text));
+
+  // A word 0 is RTAB-Map's invalid id: refused, saying what to do with an older export.
+  writeBytes(dir_ / "zero.txt", "WordID Descriptors...2\n0 0.5 0.5\n1 0.25 0.5\n");
+  std::string message;
+  EXPECT_EQ(codeOf([&] { readVocabularyText(dir_ / "zero.txt"); }, &message),
+            ErrorCode::kVocabularyRefused);
+  EXPECT_NE(message.find("line 2: word id 0"), std::string::npos) << message;
+  EXPECT_NE(message.find("zero.txt"), std::string::npos) << message;
 }
 
 }  // namespace

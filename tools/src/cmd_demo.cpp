@@ -2,7 +2,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
+#include <sstream>
 
 #include "cmd_eval.h"
 #include "commands.h"
@@ -21,6 +23,23 @@ struct DemoRequest {
   std::uint64_t seed = 1;
   SettingsInput settings;
 };
+
+// How to call this very binary so that the hints run as printed: `placedb` when PATH finds it,
+// else its path (relative to the current folder when it lies below it, e.g. build/tools/placedb).
+std::string selfCommand() {
+  std::error_code ec;
+  const fs::path self = fs::canonical("/proc/self/exe", ec);
+  if (ec) return "placedb";
+  if (const char* path = std::getenv("PATH")) {
+    std::stringstream folders(path);
+    for (std::string folder; std::getline(folders, folder, ':');)
+      if (!folder.empty() && fs::equivalent(fs::path(folder) / "placedb", self, ec))
+        return "placedb";
+  }
+  const fs::path below = self.lexically_relative(fs::current_path(ec));
+  if (ec || below.empty() || *below.begin() == "..") return self.string();
+  return below.has_parent_path() ? below.string() : "./" + below.string();
+}
 
 // Word-wrapped, every line indented.
 std::string wrap(const std::string& text, int indent, int width) {
@@ -73,13 +92,18 @@ std::string explanation(const DemoRequest& request, const synthetic::SyntheticSe
   for (const auto& plot : plots) text += fmt::format("  {}\n{}", plot.file, wrap(plot.what, 6, 92));
   text += fmt::format(
       "\nNext\n"
-      "  what the map holds:               placedb info {0}\n"
-      "  where was this image taken?:      placedb query {0} {1}\n"
-      "  a second pass, a second session:  placedb map {0} {2}\n"
-      "  the scores with a 10-frame window: placedb eval {3} {4} --window 10\n",
+      "  what the map holds:               {5} info {0}\n"
+      "  where was this image taken?:      {5} query {0} {1}\n"
+      "  a second pass, a second session:  {5} map {0} {2}\n"
+      "  the scores with a 10-frame window: {5} eval {3} {4} --window 10\n",
       (out / "demo.placedb").string(), (out / "sequence" / "images" / "000010.png").string(),
       (out / "sequence" / "frames.txt").string(), (out / "run.csv").string(),
-      (out / "sequence" / "gt_pairs.txt").string());
+      (out / "sequence" / "gt_pairs.txt").string(), selfCommand());
+  std::error_code ec;
+  if (selfCommand() != "placedb")
+    text += fmt::format(
+        "  (placedb is not on PATH: `export PATH=\"{}:$PATH\"` lets you call it as placedb)\n",
+        fs::canonical("/proc/self/exe", ec).parent_path().string());
   return text;
 }
 

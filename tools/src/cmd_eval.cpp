@@ -21,8 +21,10 @@ EvalOutcome runEvaluation(const EvalRequest& request) {
   if (!request.plots_dir.empty()) {
     RunSeries series =
         buildRunSeries(log, outcome.evaluation, gt, request.map_path, request.session);
+    series.judged = !request.gt.empty();
     outcome.plots = writePlots(series, outcome.evaluation, request.plots_dir);
-    outcome.plots.push_back(writeLoopMatrix(outcome.evaluation, gt, request.plots_dir));
+    outcome.plots.push_back(
+        writeLoopMatrix(outcome.evaluation, gt, request.plots_dir, series.judged));
   }
   return outcome;
 }

@@ -4,12 +4,29 @@
 #include <memory>
 
 #include "commands.h"
+#include "frame_log.h"
 #include "live_source.h"
 #include "map_argument.h"
 #include "mapping_run.h"
 #include "settings_input.h"
 
 namespace placedb::cli {
+namespace {
+
+// The log's columns as the code writes them, wrapped for --help.
+std::string logColumnList() {
+  std::string text, line;
+  for (const auto& name : FrameLogWriter::columns()) {
+    if (!line.empty() && line.size() + name.size() + 2 > 88) {
+      text += line + "\n";
+      line.clear();
+    }
+    line += (line.empty() ? "  " : " ") + name;
+  }
+  return text + line;
+}
+
+}  // namespace
 
 // The settings options are shared by `map` and `demo`.
 void addSettingsOptions(CLI::App& app, SettingsInput& settings) {
@@ -52,29 +69,26 @@ Command addMapCommand(CLI::App& parent) {
       "scratch server). A password in the URI is never shown; PGPASSFILE, ~/.pgpass and\n"
       "sslmode= work as in psql. If its last session ran over the same SOURCE and did not\n"
       "reach its end (a crash, Ctrl-C or --stop-after), that session resumes with the first\n"
-      "frame not yet processed; otherwise a new session starts. Frame numbers always count from\n"
+      "frame not yet processed; otherwise a new session starts. An unfinished session over\n"
+      "SOURCE that another session came after can no longer resume: map says which (exit 2),\n"
+      "and --new-session maps SOURCE again from frame 0. Frame numbers always count from\n"
       "the start of SOURCE. Unreadable images are recorded as bad frames with a warning.\n"
       "Several `map` runs may write one map on a server at once, each in its own session (a\n"
       "fleet map: a robot's session resumes as long as no other run writes it, exit 5\n"
-      "otherwise); a lost server is waited for (--server-wait), then exit 13.\n"
+      "otherwise; robots started at once on a new map wait for the first one's first place);\n"
+      "a lost server is waited for (--server-wait), then exit 13.\n"
       "A session whose SOURCE lists other images than when it began is not resumed (exit 2;\n"
       "--new-session maps it anew).\n\n"
       "Settings: defaults < --preset < --config < --calibration < --set. A resumed session\n"
-      "keeps its settings (camera intrinsics included).\n\n"
+      "keeps its settings (camera intrinsics included). By default memory is unbounded\n"
+      "(wm_max=0, t_time_ms=0: every location stays in working memory); --set wm_max=300\n"
+      "keeps at most 300 there and the rest in long-term memory, on disk only.\n\n"
       "The --log CSV has one row per frame processed by this invocation; an existing log is\n"
       "appended to only by a resume of the session that wrote it (another run is exit 2),\n"
-      "after the rows of frames the map lost (and maps again) are cut off:\n"
-      "frame,candidate_frames,score,accepted,time_ms, then outcome, location,\n"
-      "posterior, words_created, vocabulary_size, wm_size, stm_size, mean_quantisation_error,\n"
-      "feature_count, transferred, retrieved, per-stage times (features_ms ... storage_ms),\n"
-      "session, other_candidates, rejected_reason, raw_score, inliers, matches,\n"
-      "verification_ms, candidates_checked, stamp_ns. score is 0 where the ratio test or the "
-      "geometric\n"
-      "check rejected the hypothesis (raw_score keeps it); inliers/matches are the geometric\n"
-      "check's, verification_ms its time (part of filter_ms) and candidates_checked the\n"
-      "locations it examined. candidate_frames lists only frames of this\n"
-      "session (indices into SOURCE); frames of other sessions go to other_candidates as\n"
-      "SESSION:INDEX.\n\n"
+      "after the rows of frames the map lost (and maps again) are cut off. Its columns:\n" +
+      logColumnList() +
+      "\nWhat each holds, and how closures onto other sessions' frames show: docs/log.md.\n"
+      "Frames are named SESSION:INDEX, with @SECONDS.NANOSECONDS when the source stamps them.\n\n"
       "Examples:\n"
       "  placedb map run.placedb /data/lip6_outdoor/frames.txt --log run.csv\n"
       "  placedb map run.placedb images/ --set t_loop=0.2 --set wm_max=300\n"
@@ -113,28 +127,26 @@ Command addMapCommand(CLI::App& parent) {
   app->add_option("--server-wait", request->server_wait_s,
                   "a map on a server: when the connection is lost during the run, wait up to "
                   "this many seconds for the server, then go on where the map stands (default "
-                  "60; 0: at once); after that, exit 13")
+                  "60; 0: at once); after that, exit 13. Also how long a robot started with "
+                  "others on a new map waits for the first one's first place (then exit 5)")
       ->type_name("SECONDS")
       ->check(CLI::Range(0.0, 86400.0));
-  app->add_flag("--quiet,-q", request->quiet, "no progress output");
+  app->add_flag("--quiet,-q", request->quiet,
+                "no progress, start line or loop-closure lines; the one-line summary, warnings "
+                "and errors stay");
   return {app, [request, stop_after, app]() {
             if (app->count("--stop-after")) request->stop_after = *stop_after;
             const bool live = isLiveSource(request->source);
             MappingSummary s = runMapping(*request);
-            if (!request->quiet) {
-              std::string why = s.interrupted     ? (live ? "interrupted; the session is closed"
-                                                          : "interrupted; run again to resume")
-                                : s.stopped_early ? "stopped by --stop-after; run again to resume"
-                                                  : "end of source";
-              std::fputs(fmt::format("placedb: session {}: {} frames ({} bad, {} of them "
-                                     "unreadable{}) in {:.1f} s, {} new locations, accepted loop "
-                                     "closures {} ({})\n",
-                                     s.session_id, s.processed, s.bad, s.unreadable,
-                                     live ? fmt::format("; {} dropped while busy", s.dropped) : "",
-                                     s.seconds, s.locations_created, s.loop_closures, why)
-                             .c_str(),
-                         stderr);
-            }
+            // Kept under --quiet: one line saying what the run did and what comes next.
+            std::fputs(fmt::format("placedb: session {}: {} frames ({} bad, {} of them "
+                                   "unreadable{}) in {:.1f} s, {} new locations, accepted loop "
+                                   "closures {} ({})\n",
+                                   s.session_id, s.processed, s.bad, s.unreadable,
+                                   live ? fmt::format("; {} dropped while busy", s.dropped) : "",
+                                   s.seconds, s.locations_created, s.loop_closures, endOfRunText(s))
+                           .c_str(),
+                       stderr);
             return 0;
           }};
 }

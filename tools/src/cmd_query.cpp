@@ -6,6 +6,7 @@
 
 #include "commands.h"
 #include "exit_codes.h"
+#include "frame_names.h"
 #include "image_source.h"
 #include "map_argument.h"
 #include "map_summary.h"
@@ -32,14 +33,45 @@ Options storedOptions(const std::string& map_path) {
   return *options;
 }
 
+nlohmann::json frameJson(const FrameRef& f) {
+  return {{"session", f.session_id},
+          {"frame_id", f.frame_id},
+          {"source_index", f.source_index},
+          {"stamp_ns", f.stamp_ns ? nlohmann::json(*f.stamp_ns) : nlohmann::json()},
+          {"path", f.source_path}};
+}
+
 nlohmann::json framesJson(const std::vector<FrameRef>& frames) {
   nlohmann::json list = nlohmann::json::array();
-  for (const auto& f : frames)
-    list.push_back({{"session", f.session_id},
-                    {"frame_id", f.frame_id},
-                    {"source_index", f.source_index},
-                    {"path", f.source_path}});
+  for (const auto& f : frames) list.push_back(frameJson(f));
   return list;
+}
+
+// A verified match's pose, under the names Python's QueryMatch.pose uses: the query's camera in
+// that of the location's first frame (map.h), quaternion x, y, z, w as ROS and Eigen give it.
+nlohmann::json poseJson(const QueryMatch& m) {
+  if (!m.pose) return nullptr;
+  nlohmann::json pose = {{"rotation_xyzw", {m.pose->qx, m.pose->qy, m.pose->qz, m.pose->qw}},
+                         {"translation", {m.pose->tx, m.pose->ty, m.pose->tz}},
+                         {"inliers", m.pose->inliers}};
+  if (!m.frames.empty()) pose["relative_to"] = frameJson(m.frames.front());
+  return pose;
+}
+
+// The lines under a match in the text output: its frames, then its pose or why it has none.
+std::string matchDetails(const QueryMatch& m) {
+  std::string text;
+  for (const auto& f : m.frames)
+    text += fmt::format("       frame {}  {}\n", frameName(f), f.source_path);
+  if (m.pose && !m.frames.empty())
+    text += fmt::format(
+        "       pose relative to {}: rotation_xyzw ({:.4f}, {:.4f}, {:.4f}, {:.4f})  "
+        "translation ({:.3f}, {:.3f}, {:.3f})  {} inliers\n",
+        frameName(m.frames.front()), m.pose->qx, m.pose->qy, m.pose->qz, m.pose->qw, m.pose->tx,
+        m.pose->ty, m.pose->tz, m.pose->inliers);
+  else if (m.verified)
+    text += fmt::format("       no pose: {}\n", m.no_pose_reason);
+  return text;
 }
 
 // The images an argument names, as `placedb map` reads them: a folder's images in natural order,
@@ -112,10 +144,10 @@ int runQuery(const QueryRequest& request) {
             {"similarity", m.similarity},    {"code_similarity", m.code_similarity},
             {"inliers", m.inliers},          {"verified", m.verified},
             {"frames", framesJson(m.frames)}};
-        if (m.pose)  // x, y, z, w: the order of every placedb interface, ROS's and Eigen's
-          match["pose"] = {{"rotation_xyzw", {m.pose->qx, m.pose->qy, m.pose->qz, m.pose->qw}},
-                           {"translation", {m.pose->tx, m.pose->ty, m.pose->tz}},
-                           {"inliers", m.pose->inliers}};
+        if (m.verified) {
+          match["pose"] = poseJson(m);
+          if (!m.pose) match["no_pose_reason"] = m.no_pose_reason;
+        }
         matches.push_back(match);
       }
       out.push_back({{"image", image_path},
@@ -138,9 +170,7 @@ int runQuery(const QueryRequest& request) {
           "({} frame{})\n",
           i + 1, m.location_id, storage::toString(m.tier), m.inliers, m.verified ? " verified" : "",
           m.code_similarity, m.similarity, m.frames.size(), m.frames.size() == 1 ? "" : "s");
-      for (const auto& f : m.frames)
-        text += fmt::format("       session {} frame {}  {}\n", f.session_id, f.source_index,
-                            f.source_path);
+      text += matchDetails(m);
     }
     std::fputs(text.c_str(), stdout);
   }
@@ -163,8 +193,11 @@ Command addQueryCommand(CLI::App& parent) {
       "Verdict: 'known' when the best candidate passes the check (geometry_rule),\n"
       "'unknown' when none does, 'unverified' when the map's settings switch the check off.\n"
       "Prints the best locations (verified first, by inliers), their tier, the frames they\n"
-      "cover and how many locations were searched. The map is opened read-only with the\n"
-      "settings of its last session.\n"
+      "cover (SESSION:INDEX, @SECONDS when the source stamped them) and how many locations\n"
+      "were searched. With camera intrinsics a verified match also gets its pose: the query's\n"
+      "camera in that of the location's first frame (--json: pose.rotation_xyzw, translation,\n"
+      "inliers, relative_to); without one a verified match says why (no_pose_reason). The map\n"
+      "is opened read-only with the settings of its last session.\n"
       "Exit status 3 when an image cannot be read or used (a folder, not an image, too small\n"
       "or too large): it gets one error line naming it, and the others are still answered.\n\n"
       "Examples:\n"

@@ -1,13 +1,9 @@
 #pragma once
-// The per-frame CSV log of a mapping run (format of /work/shared/EVALUATION.md) and a small
-// CSV reader for `eval`.
+// The per-frame CSV log of a mapping run and a small CSV reader for `eval`. Its first columns are
+// the scored format of ../shared/EVALUATION.md (frame, candidate_frames, score, accepted,
+// time_ms); what each column holds is docs/log.md's table, which tests/cli/log_doc_test.cpp keeps
+// in step with columns().
 //
-// Columns: frame, candidate_frames, score, accepted, time_ms (the scored ones), then
-// outcome, location, posterior, words_created, vocabulary_size, wm_size, stm_size,
-// mean_quantisation_error, feature_count, transferred, retrieved, the stage times
-// features_ms ... storage_ms, session, other_candidates, rejected_reason, raw_score, the
-// geometric check's inliers and matches, its time verification_ms (part of filter_ms) and the
-// number of candidate locations it examined, candidates_checked.
 // score is 0 where a check other than the final threshold (the ratio test) rejected the
 // hypothesis, as EVALUATION.md asks; raw_score is the filter's loop probability regardless.
 // candidate_frames holds the source indices of the hypothesis' frames from this session only:

@@ -8,6 +8,7 @@
 #include <map>
 #include <tuple>
 
+#include "frame_names.h"
 #include "placedb/error.h"
 #include "placedb/storage/map_store.h"
 #include "text_file.h"
@@ -88,6 +89,22 @@ std::string stampsText(const GraphLocation& location) {
   return any ? text : std::string();
 }
 
+// "x,y,z,qx,qy,qz,qw" of a placed location; empty fields otherwise.
+std::string poseFields(const std::optional<Pose3>& pose) {
+  if (!pose) return ",,,,,,";
+  const auto& p = pose->position;
+  const auto& q = pose->rotation_xyzw;
+  return fmt::format("{},{},{},{},{},{},{}", p[0], p[1], p[2], q[0], q[1], q[2], q[3]);
+}
+
+// Every frame of a location as frame_names.h names it, for the g2o comments.
+std::string frameNamesText(const GraphLocation& location) {
+  std::string text;
+  for (const auto& f : location.frames)
+    text += (text.empty() ? "" : " ") + frameName(f.session_id, f.source_index, f.stamp_ns);
+  return text;
+}
+
 std::string scoreText(const GraphLink& link) {
   return link.score ? fmt::format("{}", *link.score) : std::string();
 }
@@ -99,10 +116,10 @@ void writeCsv(const MapGraph& graph, const std::filesystem::path& folder) {
     throw Error(ErrorCode::kIo, fmt::format("cannot create {}: {}", folder.string(), ec.message()));
   const auto locations_path = folder / "locations.csv";
   std::string locations;
-  locations += "location,session,tier,weight,frames,stamps_ns\n";
+  locations += "location,session,tier,weight,frames,stamps_ns,x,y,z,qx,qy,qz,qw\n";
   for (const auto& l : graph.locations)
-    locations += fmt::format("{},{},{},{},{},{}\n", l.id, l.session_id, l.tier, l.weight,
-                             framesText(l), stampsText(l));
+    locations += fmt::format("{},{},{},{},{},{},{}\n", l.id, l.session_id, l.tier, l.weight,
+                             framesText(l), stampsText(l), poseFields(l.pose));
   writeTextFile(locations_path, locations);
 
   const auto links_path = folder / "links.csv";
@@ -115,6 +132,10 @@ void writeCsv(const MapGraph& graph, const std::filesystem::path& folder) {
       const auto& t = k.pose->translation_direction;
       pose = fmt::format("{},{},{},{},{},{},{},{}", q[0], q[1], q[2], q[3], t[0], t[1], t[2],
                          k.pose->inliers);
+    } else if (k.odometry) {
+      const auto& q = k.odometry->rotation_xyzw;
+      const auto& t = k.odometry->position;
+      pose = fmt::format("{},{},{},{},{},{},{},", q[0], q[1], q[2], q[3], t[0], t[1], t[2]);
     }
     const bool closure = k.type == "loop_closure";
     links += fmt::format("{},{},{},{},{},{}\n", k.location_a, k.location_b, k.type, scoreText(k),
@@ -140,32 +161,46 @@ void writeGraphml(const MapGraph& graph, const std::filesystem::path& path) {
   for (const char* key : {"qx", "qy", "qz", "qw", "tx", "ty", "tz"})
     out += fmt::format("  <key id=\"{0}\" for=\"edge\" attr.name=\"{0}\" attr.type=\"double\"/>\n",
                        key);
+  // A placed node's pose (attachPoses) under the names of locations.csv; key ids differ from the
+  // edges' qx ... qw, which GraphML wants unique.
+  for (const char* key : {"x", "y", "z", "qx", "qy", "qz", "qw"})
+    out += fmt::format(
+        "  <key id=\"node_{0}\" for=\"node\" attr.name=\"{0}\" attr.type=\"double\"/>\n", key);
   out +=
       "  <key id=\"pose_inliers\" for=\"edge\" attr.name=\"pose_inliers\" "
       "attr.type=\"long\"/>\n"
       "  <graph id=\"placedb\" edgedefault=\"directed\">\n";
   for (const auto& l : graph.locations) {
     const std::string stamps = stampsText(l);
+    std::string pose;
+    if (l.pose) {
+      const auto& p = l.pose->position;
+      const auto& q = l.pose->rotation_xyzw;
+      const double values[] = {p[0], p[1], p[2], q[0], q[1], q[2], q[3]};
+      const char* keys[] = {"x", "y", "z", "qx", "qy", "qz", "qw"};
+      for (int i = 0; i < 7; ++i)
+        pose += fmt::format("<data key=\"node_{}\">{}</data>", keys[i], values[i]);
+    }
     out += fmt::format(
         "    <node id=\"{}\"><data key=\"session\">{}</data><data key=\"tier\">{}</data>"
-        "<data key=\"weight\">{}</data><data key=\"frames\">{}</data>{}</node>\n",
+        "<data key=\"weight\">{}</data><data key=\"frames\">{}</data>{}{}</node>\n",
         l.id, l.session_id, l.tier, l.weight, framesText(l),
-        stamps.empty() ? "" : fmt::format("<data key=\"stamps_ns\">{}</data>", stamps));
+        stamps.empty() ? "" : fmt::format("<data key=\"stamps_ns\">{}</data>", stamps), pose);
   }
   for (const auto& k : graph.links) {
     std::string data = fmt::format("<data key=\"type\">{}</data>", k.type);
     if (k.score) data += fmt::format("<data key=\"score\">{}</data>", *k.score);
     if (k.type == "loop_closure")
       data += fmt::format("<data key=\"appearance_only\">{}</data>", k.pose ? "false" : "true");
-    if (k.pose) {
-      const auto& q = k.pose->rotation_xyzw;
-      const auto& t = k.pose->translation_direction;
+    if (k.pose || k.odometry) {
+      const auto& q = k.pose ? k.pose->rotation_xyzw : k.odometry->rotation_xyzw;
+      const auto& t = k.pose ? k.pose->translation_direction : k.odometry->position;
       const double values[] = {q[0], q[1], q[2], q[3], t[0], t[1], t[2]};
       const char* keys[] = {"qx", "qy", "qz", "qw", "tx", "ty", "tz"};
       for (int i = 0; i < 7; ++i)
         data += fmt::format("<data key=\"{}\">{}</data>", keys[i], values[i]);
-      data += fmt::format("<data key=\"pose_inliers\">{}</data>", k.pose->inliers);
     }
+    if (k.pose) data += fmt::format("<data key=\"pose_inliers\">{}</data>", k.pose->inliers);
     out += fmt::format("    <edge source=\"{}\" target=\"{}\">{}</edge>\n", k.location_a,
                        k.location_b, data);
   }
@@ -174,13 +209,26 @@ void writeGraphml(const MapGraph& graph, const std::filesystem::path& path) {
 }
 
 void writeG2o(const MapGraph& graph, const std::filesystem::path& path) {
+  std::size_t placed = 0;
+  for (const auto& l : graph.locations) placed += l.pose.has_value();
   std::string out;
-  out +=
-      "# placedb map graph: locations at the origin (no poses are stored); links in\n"
-      "# odometry order, then loop closures. Replace the odometry edges with measured ones.\n"
-      "# A closure with a pose: unit translation direction, zero translation information.\n";
-  for (const auto& l : graph.locations)
-    out += fmt::format("VERTEX_SE3:QUAT {} 0 0 0 0 0 0 1\n", l.id);
+  out += placed == 0
+             ? "# placedb map graph: locations at the origin (no poses were given: placedb export\n"
+               "# --poses FILE places them); links in odometry order, then loop closures.\n"
+             : fmt::format(
+                   "# placedb map graph: {} of {} locations at their poses from a pose "
+                   "track,\n# the others at the origin; links in odometry order, then "
+                   "loop closures.\n",
+                   placed, graph.locations.size());
+  out += "# A closure with a pose: unit translation direction, zero translation information.\n";
+  for (const auto& l : graph.locations) {
+    out += fmt::format("# placedb location {} frames {}\n", l.id, frameNamesText(l));
+    const Pose3 pose = l.pose.value_or(Pose3{});
+    const auto& p = pose.position;
+    const auto& q = pose.rotation_xyzw;
+    out += fmt::format("VERTEX_SE3:QUAT {} {} {} {} {} {} {} {}\n", l.id, p[0], p[1], p[2], q[0],
+                       q[1], q[2], q[3]);
+  }
   // Upper triangle of the 6 x 6 information matrix row by row (x y z, then rotation): unit,
   // or for a measured closure zero on the translation, whose scale one camera cannot measure.
   const std::string information = "1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1";
@@ -188,15 +236,21 @@ void writeG2o(const MapGraph& graph, const std::filesystem::path& path) {
   for (const char* type : {"odometry", "loop_closure"}) {
     for (const auto& k : graph.links) {
       if (k.type != type) continue;
-      RelativePose pose = k.pose.value_or(RelativePose{});
+      std::array<double, 3> t{0, 0, 0};
+      std::array<double, 4> q{0, 0, 0, 1};
+      if (k.pose) {
+        t = k.pose->translation_direction;
+        q = k.pose->rotation_xyzw;
+      } else if (k.odometry) {
+        t = k.odometry->position;
+        q = k.odometry->rotation_xyzw;
+      }
       if (k.type == "loop_closure" && !k.pose)
         out += fmt::format("# placedb appearance-only {} {} score {}\n", k.location_a, k.location_b,
                            scoreText(k));
       if (k.pose)
         out += fmt::format("# placedb pose {} {} inliers {} score {}\n", k.location_a, k.location_b,
                            k.pose->inliers, scoreText(k));
-      const auto& t = pose.translation_direction;
-      const auto& q = pose.rotation_xyzw;
       out += fmt::format("EDGE_SE3:QUAT {} {} {} {} {} {} {} {} {} {}\n", k.location_a,
                          k.location_b, t[0], t[1], t[2], q[0], q[1], q[2], q[3],
                          k.pose ? rotation_only : information);
@@ -246,13 +300,33 @@ MapGraph readMapGraph(const std::string& map_path) {
     for (const auto& link : store.links(l.id)) {
       if (link.location_a != l.id) continue;  // each stored link once
       graph.links.push_back({link.location_a, link.location_b, linkTypeName(link.type), link.score,
-                             storedPose(poses, link)});
+                             storedPose(poses, link), std::nullopt});
     }
   std::sort(graph.links.begin(), graph.links.end(), [](const GraphLink& a, const GraphLink& b) {
     return std::tie(a.location_a, a.location_b, a.type) <
            std::tie(b.location_a, b.location_b, b.type);
   });
   return graph;
+}
+
+std::size_t attachPoses(MapGraph& graph, const PoseTrack& track) {
+  std::map<std::int64_t, const GraphLocation*> by_id;
+  std::size_t placed = 0;
+  for (auto& l : graph.locations) {
+    l.pose.reset();
+    if (!l.frames.empty() && l.frames.front().stamp_ns)
+      l.pose = track.at(*l.frames.front().stamp_ns);
+    placed += l.pose.has_value();
+    by_id[l.id] = &l;
+  }
+  for (auto& k : graph.links) {
+    k.odometry.reset();
+    if (k.type != "odometry") continue;
+    const auto a = by_id.find(k.location_a), b = by_id.find(k.location_b);
+    if (a == by_id.end() || b == by_id.end() || !a->second->pose || !b->second->pose) continue;
+    k.odometry = between(*a->second->pose, *b->second->pose);
+  }
+  return placed;
 }
 
 void writeMapGraph(const MapGraph& graph, const std::string& format,

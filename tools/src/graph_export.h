@@ -5,11 +5,15 @@
 //
 //   csv      OUT is a folder: locations.csv and links.csv
 //   graphml  one GraphML file (Gephi, yEd, networkx)
-//   g2o      one g2o file: VERTEX_SE3:QUAT per location at the origin (placedb keeps no poses)
-//            and EDGE_SE3:QUAT per link; a link without a measured pose is the identity with a
-//            unit information matrix, announced by a `# placedb appearance-only A B` comment.
-//            A closure with a measured pose (a map made with intrinsics fx fy cx cy) carries
-//            its rotation and unit translation direction, with unit information on the rotation
+//   g2o      one g2o file: VERTEX_SE3:QUAT per location and EDGE_SE3:QUAT per link, each vertex
+//            after a `# placedb location ID frames F...` comment naming its frames as
+//            SESSION:INDEX[@STAMP] (frame_names.h). placedb keeps no metric poses: a vertex is
+//            at the origin and an odometry edge the identity with a unit information matrix,
+//            unless a pose track (pose_track.h) gives the location's pose, and the edge the
+//            relative pose of its two ends. A closure link without a measured pose is the
+//            identity with unit information, announced by `# placedb appearance-only A B`. A
+//            closure with a measured pose (a map made with intrinsics fx fy cx cy) carries its
+//            rotation and unit translation direction, with unit information on the rotation
 //            and zero on the translation (one camera measures no scale: the optimiser is told
 //            nothing about the distance, the direction is in the measurement for tools that
 //            read it), announced by `# placedb pose A B inliers N`
@@ -19,6 +23,8 @@
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "pose_track.h"
 
 namespace placedb::cli {
 
@@ -34,6 +40,9 @@ struct GraphLocation {
   std::string tier;  // stm | wm | ltm
   std::int64_t weight = 0;
   std::vector<GraphFrame> frames;  // by frame id
+  // From a pose track (attachPoses): the pose at the stamp of the location's first frame, the
+  // frame whose camera its closures' poses are relative to.
+  std::optional<Pose3> pose;
 };
 
 // Where the geometric check measured it: the pose of b's camera in a's (g2o's measurement of
@@ -50,6 +59,8 @@ struct GraphLink {
   std::string type;                             // odometry | loop_closure | merge
   std::optional<double> score;
   std::optional<RelativePose> pose;  // none: appearance only
+  // An odometry link between two locations a pose track placed: b's pose in a's.
+  std::optional<Pose3> odometry;
 };
 
 struct MapGraph {
@@ -60,6 +71,10 @@ struct MapGraph {
 // Reads the map read-only. Throws placedb::Error(kIo) when it is missing, and the storage
 // errors of a refused map.
 MapGraph readMapGraph(const std::string& map_path);
+
+// Places each location whose first frame has a stamp within the track, and measures each
+// odometry link between two placed locations. Returns the locations placed.
+std::size_t attachPoses(MapGraph& graph, const PoseTrack& track);
 
 // Throws placedb::Error(kInvalidArgument) for another format, kIo when OUT cannot be written.
 void writeMapGraph(const MapGraph& graph, const std::string& format,

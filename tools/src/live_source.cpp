@@ -2,11 +2,19 @@
 
 #include <fmt/format.h>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <condition_variable>
+#include <cstring>
+#include <filesystem>
 #include <mutex>
 #include <opencv2/videoio.hpp>
+#include <opencv2/videoio/registry.hpp>
 #include <regex>
 #include <thread>
 
@@ -21,6 +29,47 @@ using Clock = std::chrono::steady_clock;
 // A network camera answers within seconds or is down; FFmpeg's own defaults wait far longer.
 constexpr int kOpenTimeoutMs = 10000;
 constexpr int kReadTimeoutMs = 5000;
+
+// The V4L2 devices of this machine, for a message that names the cameras there are.
+std::string videoDevices() {
+  std::vector<std::string> found;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator("/dev", ec))
+    if (std::regex_match(entry.path().filename().string(), std::regex("video[0-9]+")))
+      found.push_back(entry.path().string());
+  std::sort(found.begin(), found.end());
+  std::string list;
+  for (const auto& device : found) list += (list.empty() ? "" : " ") + device;
+  return list.empty() ? "none" : list;
+}
+
+// What was tried and what stood in the way, for a source OpenCV would not open.
+std::string whyNotOpened(const std::string& source) {
+  std::smatch m;
+  const bool camera = std::regex_match(source, m, std::regex("camera:([0-9]+)"));
+  if (camera || source.rfind("/dev/", 0) == 0) {
+    const std::string device = camera ? "/dev/video" + m[1].str() : source;
+    if (!cv::videoio_registry::hasBackend(cv::CAP_V4L2))
+      return "this OpenCV has no V4L2 backend to read cameras with";
+    struct stat st {};
+    if (::stat(device.c_str(), &st) != 0)
+      return fmt::format("{} does not exist (V4L2 devices here: {})", device, videoDevices());
+    if (!S_ISCHR(st.st_mode)) return fmt::format("{} is not a device", device);
+    if (::access(device.c_str(), R_OK | W_OK) != 0)
+      return fmt::format("{}: {} (is the user in its group, usually `video`?)", device,
+                         std::strerror(errno));
+    return fmt::format(
+        "OpenCV's V4L2 backend could not open {} (another program may hold it, or it is not a "
+        "capture device; V4L2 devices here: {})",
+        device, videoDevices());
+  }
+  if (!cv::videoio_registry::hasBackend(cv::CAP_FFMPEG))
+    return "this OpenCV has no FFmpeg backend to read streams with";
+  return fmt::format(
+      "FFmpeg could not open it, waiting up to {} s (the host unreachable or refusing, a wrong "
+      "path, or not a video stream)",
+      kOpenTimeoutMs / 1000);
+}
 
 class LiveSource : public ImageSource {
  public:
@@ -37,7 +86,9 @@ class LiveSource : public ImageSource {
       opened = capture_.open(text, cv::CAP_FFMPEG,
                              {cv::CAP_PROP_OPEN_TIMEOUT_MSEC, kOpenTimeoutMs,
                               cv::CAP_PROP_READ_TIMEOUT_MSEC, kReadTimeoutMs});
-    if (!opened) throw Error(ErrorCode::kIo, fmt::format("cannot open live source {}", source));
+    if (!opened)
+      throw Error(ErrorCode::kIo,
+                  fmt::format("cannot open live source {}: {}", source, whyNotOpened(text)));
     grabber_ = std::thread([this] { grab(); });
   }
   ~LiveSource() override {

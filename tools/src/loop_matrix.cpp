@@ -9,10 +9,10 @@ namespace placedb::cli {
 namespace {
 
 // Colours in OpenCV's BGR order, ranked so that a later one overwrites an earlier one.
-const cv::Vec3b kWhite(255, 255, 255), kGreen(0, 200, 0), kRed(0, 0, 255);
+const cv::Vec3b kWhite(255, 255, 255), kGreen(0, 200, 0), kRed(0, 0, 255), kYellow(0, 220, 255);
 
 int rankOf(const cv::Vec3b& colour) {
-  if (colour == kRed) return 3;
+  if (colour == kRed || colour == kYellow) return 3;
   if (colour == kGreen) return 2;
   if (colour == kWhite) return 1;
   return 0;
@@ -21,7 +21,7 @@ int rankOf(const cv::Vec3b& colour) {
 }  // namespace
 
 WrittenPlot writeLoopMatrix(const Evaluation& evaluation, const GroundTruth& gt,
-                            const std::filesystem::path& folder) {
+                            const std::filesystem::path& folder, bool judged) {
   std::int64_t frames = 1;
   for (const auto& f : evaluation.frames) {
     frames = std::max(frames, f.frame + 1);
@@ -44,7 +44,8 @@ WrittenPlot writeLoopMatrix(const Evaluation& evaluation, const GroundTruth& gt,
     for (std::int64_t r : refs) mark(q, r, kWhite);
   for (const auto& f : evaluation.frames) {
     if (!f.accepted) continue;
-    for (std::int64_t c : f.candidates) mark(f.frame, c, f.correct ? kGreen : kRed);
+    for (std::int64_t c : f.candidates)
+      mark(f.frame, c, !judged ? kYellow : f.correct ? kGreen : kRed);
   }
   const auto path = folder / "loop_matrix.png";
   bool written = false;
@@ -54,6 +55,10 @@ WrittenPlot writeLoopMatrix(const Evaluation& evaluation, const GroundTruth& gt,
     written = false;
   }
   if (!written) throw Error(ErrorCode::kIo, "cannot write " + path.string());
+  if (!judged)
+    return {"loop_matrix.png",
+            "the closures the engine accepted: frame down, the frame it closed on across, in "
+            "yellow (no ground truth: none is judged)"};
   return {"loop_matrix.png",
           "loop pairs: frame down, earlier frame across; white missed, green right, red wrong"};
 }

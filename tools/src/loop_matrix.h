@@ -4,8 +4,9 @@
 //   white  a ground-truth loop pair that no accepted closure found
 //   green  an accepted closure whose candidate is right (within the window of the truth)
 //   red    an accepted closure whose candidate is wrong
-// A run longer than kLoopMatrixMaxSide frames is shrunk by a whole factor; where pairs share a
-// pixel, red wins over green and green over white, so no wrong closure is hidden.
+// Without ground truth (judged false) it is the matrix of the accepted closures alone, each pair
+// yellow. A run longer than kLoopMatrixMaxSide frames is shrunk by a whole factor; where pairs
+// share a pixel, red wins over green and green over white, so no wrong closure is hidden.
 #include <filesystem>
 
 #include "eval.h"
@@ -18,6 +19,6 @@ constexpr int kLoopMatrixMaxSide = 1000;
 // Writes loop_matrix.png into `folder` (which must exist). Throws placedb::Error(kIo) when it
 // cannot be written.
 WrittenPlot writeLoopMatrix(const Evaluation& evaluation, const GroundTruth& gt,
-                            const std::filesystem::path& folder);
+                            const std::filesystem::path& folder, bool judged = true);
 
 }  // namespace placedb::cli

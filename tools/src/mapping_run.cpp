@@ -11,6 +11,7 @@
 
 #include "exit_codes.h"
 #include "frame_log.h"
+#include "frame_names.h"
 #include "image_source.h"
 #include "interrupt.h"
 #include "placedb/map.h"
@@ -57,21 +58,43 @@ struct ResumeDecision {
   std::optional<ResumePoint> resume;
 };
 
-// The newest session over `source` whose memory the map still keeps: the newest session of the
-// map's main line (on a file, its last session), or a side session of a fleet map, begun while
-// another writer held the map (schema/SCHEMA.md, "Fleet maps").
-std::optional<storage::SessionRecord> sessionOver(const storage::MapStore& store,
-                                                  const ImageSource& source) {
+// The newest session over `source`, and whether the map still keeps its memory: the newest
+// session of the map's main line (on a file, its last session) does, and so does a side session
+// of a fleet map, begun while another writer held the map (schema/SCHEMA.md, "Fleet maps").
+struct SessionOver {
+  storage::SessionRecord record;
+  bool resumable = false;
+};
+
+std::optional<SessionOver> newestSessionOver(const storage::MapStore& store,
+                                             const ImageSource& source) {
   const std::vector<storage::SessionRecord> all = store.sessions();
   for (auto it = all.rbegin(); it != all.rend(); ++it) {
     if (!sameSource(it->source, source.canonicalPath())) continue;
     const storage::SessionMemory memory = store.sessionMemory(it->id);
-    if (memory == storage::SessionMemory::kMainLine ||
-        (memory == storage::SessionMemory::kOwn && store.sharedByWriters()))
-      return *it;
-    return std::nullopt;
+    return SessionOver{*it,
+                       memory == storage::SessionMemory::kMainLine ||
+                           (memory == storage::SessionMemory::kOwn && store.sharedByWriters())};
   }
   return std::nullopt;
+}
+
+// An unfinished session over the source that can no longer resume: mapping the source again
+// from frame 0 without a word would hide that its rest was never mapped.
+Error unfinishedSession(const std::string& map_path, const storage::MapStore& store,
+                        const storage::SessionRecord& session, std::int64_t next,
+                        const ImageSource& source) {
+  const auto size = source.size();
+  const auto last = store.lastSession();
+  return Error(
+      ErrorCode::kInvalidArgument,
+      fmt::format("session {} of {} over {} is unfinished ({} of {} frames mapped) and can no "
+                  "longer resume: session {} began after it, and only a map's newest session "
+                  "resumes (on a server, also a side session); give --new-session to map {} "
+                  "again from frame 0 in a new session",
+                  session.id, map_path, source.canonicalPath(), next,
+                  size ? std::to_string(*size) : std::string("?"), last ? last->id : 0,
+                  source.canonicalPath()));
 }
 
 ResumeDecision sessionToResume(const std::string& map_path, const ImageSource& source,
@@ -81,19 +104,21 @@ ResumeDecision sessionToResume(const std::string& map_path, const ImageSource& s
   try {
     const auto store_owner = storage::openMapStore(map_path, storage::OpenMode::kReadOnly);
     storage::MapStore& store = *store_owner;
-    auto last = sessionOver(store, source);
-    if (!last) return {};
-    auto next = resumeIndex(*last, store.lastFrameIndex(last->id), source);
+    const auto newest = newestSessionOver(store, source);
+    if (!newest) return {};
+    const storage::SessionRecord& last = newest->record;
+    auto next = resumeIndex(last, store.lastFrameIndex(last.id), source);
     if (!next) return {};
-    if (last->source_digest && !last->source_digest->empty() &&
-        *last->source_digest != source.digest())
+    if (!newest->resumable) throw unfinishedSession(map_path, store, last, *next, source);
+    if (last.source_digest && !last.source_digest->empty() &&
+        *last.source_digest != source.digest())
       throw Error(ErrorCode::kInvalidArgument,
                   fmt::format("cannot resume session {} of {}: {} changed since the session "
                               "began (its images differ: {} then, {} now), so frame {} would be "
                               "another image; use --new-session to map it as a new session",
-                              last->id, map_path, source.canonicalPath(), *last->source_digest,
+                              last.id, map_path, source.canonicalPath(), *last.source_digest,
                               source.digest(), *next));
-    return {true, ResumePoint{last->id, *next, store.settings(last->id)}};
+    return {true, ResumePoint{last.id, *next, store.settings(last.id)}};
   } catch (const storage::StorageError&) {
     return {false, std::nullopt};
   }
@@ -111,20 +136,16 @@ std::optional<ResumePoint> sessionToResume(const Map& map, const ImageSource& so
   return ResumePoint{last->id, *next, {}};
 }
 
-// "frame 52 closes a loop on frames 10 11 (location 12, score 0.874, 23 inliers)"; frames of
-// other sessions as SESSION:INDEX, as in the log.
+// "frame 1:52 closes a loop on frames 1:10 1:11 (location 12, score 0.874, 23 inliers, pose
+// relative to 1:10)": every frame as SESSION:INDEX[@STAMP] (frame_names.h).
 std::string closureLine(const FrameResult& r) {
-  std::string frames;
-  for (const auto& ref : r.hypothesis.frames)
-    frames +=
-        (frames.empty() ? "" : " ") +
-        (ref.session_id == r.session_id ? std::to_string(ref.source_index)
-                                        : fmt::format("{}:{}", ref.session_id, ref.source_index));
+  const auto& frames = r.hypothesis.frames;
   return fmt::format(
-      "placedb: frame {} closes a loop on frame{} {} (location {}, score {:.3f}, "
-      "{} inliers{})\n",
-      r.source_index, r.hypothesis.frames.size() == 1 ? "" : "s", frames, r.hypothesis.location_id,
-      r.hypothesis.score, r.hypothesis.inliers, r.hypothesis.pose ? ", pose" : "");
+      "placedb: frame {} closes a loop on frame{} {} (location {}, score {:.3f}, {} inliers{})\n",
+      frameName(r.session_id, r.source_index, r.stamp_ns), frames.size() == 1 ? "" : "s",
+      frameNames(frames), r.hypothesis.location_id, r.hypothesis.score, r.hypothesis.inliers,
+      r.hypothesis.pose && !frames.empty() ? ", pose relative to " + frameName(frames.front())
+                                           : std::string());
 }
 
 // The frame log after a reopen: rows of frames the map does not hold are cut off (they are
@@ -179,6 +200,39 @@ std::pair<std::unique_ptr<Map>, SessionInfo> reopenAfterLoss(const MappingReques
                   storage::mapDisplayName(request.map_path), request.server_wait_s, problem));
 }
 
+// A new session. On a map on a server whose main line another writer holds and where no place
+// is stored yet (robots started at the same instant on a new map), a side session cannot begin
+// (map_fleet.cpp): it waits for that first place up to --server-wait, reopening the map each
+// time so that it starts from what the map holds then.
+SessionInfo beginNewSession(std::unique_ptr<Map>& map, const MappingRequest& request,
+                            const Options& options, const ImageSource& source) {
+  using Clock = std::chrono::steady_clock;
+  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(request.server_wait_s));
+  bool noted = false;
+  while (true) {
+    try {
+      return map->beginSession(source.canonicalPath(), source.digest());
+    } catch (const Error& e) {
+      if (e.code() != ErrorCode::kMapBusy || !storage::isServerMap(request.map_path)) throw;
+      if (Clock::now() >= deadline || interruptRequested()) {
+        if (!noted) throw;
+        throw Error(ErrorCode::kMapBusy, fmt::format("{} (waited {} s: --server-wait)", e.what(),
+                                                     request.server_wait_s));
+      }
+      if (!noted)
+        printNote(
+            fmt::format("{}: another writer holds the map and has not stored its first "
+                        "place yet; waiting up to {} s for it (--server-wait)",
+                        storage::mapDisplayName(request.map_path), request.server_wait_s));
+      noted = true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    map.reset();
+    map = Map::open(request.map_path, options, Map::Mode::kMapping);
+  }
+}
+
 // The server of the map went away while the run opened the map, after it had answered.
 struct OpeningLost {
   std::string problem;
@@ -226,7 +280,7 @@ MappingSummary runOnce(const MappingRequest& request, std::chrono::steady_clock:
       summary.resumed = true;
       source->seek(summary.first_index);
     } else {
-      summary.session_id = map->beginSession(source->canonicalPath(), source->digest()).id;
+      summary.session_id = beginNewSession(map, request, options, *source).id;
     }
   } catch (const Error& e) {
     // The look above reached the server (or an earlier attempt did), so it went away since: a
@@ -256,6 +310,7 @@ MappingSummary runOnce(const MappingRequest& request, std::chrono::steady_clock:
             .c_str(),
         stderr);
 
+  summary.next_index = summary.first_index;
   std::optional<std::int64_t> remaining;
   if (auto size = source->size())
     remaining = std::max<std::int64_t>(0, *size - summary.first_index);
@@ -311,6 +366,7 @@ MappingSummary runOnce(const MappingRequest& request, std::chrono::steady_clock:
                           "the connection was lost",
                           request.log_path, frame.index));
       }
+      summary.next_index = next;
       if (source->kind() != "live") source->seek(next);
       log = reopenLog(request, summary.session_id, next);
       printNote(fmt::format("the server is back: session {} goes on from frame {}",
@@ -319,6 +375,7 @@ MappingSummary runOnce(const MappingRequest& request, std::chrono::steady_clock:
     }
     if (frame.image.empty()) ++summary.unreadable;
     ++summary.processed;
+    summary.next_index = frame.index + 1;
     if (result.outcome == FrameOutcome::kNewLocation) ++summary.locations_created;
     if (result.outcome == FrameOutcome::kBad) ++summary.bad;
     if (result.hypothesis.accepted) {
@@ -345,12 +402,33 @@ MappingSummary runOnce(const MappingRequest& request, std::chrono::steady_clock:
     reopenAfterLoss(request, options, summary.session_id, e).first->close();
   }
   if (progress) progress->finish();
+  // What the next run over the source will do (the resume rule above, on a clean close): say
+  // "run again to resume" only when it will.
+  summary.live = source->kind() == "live";
+  summary.source_size = source->size();
+  summary.reached_end =
+      summary.reached_end || (summary.source_size && summary.next_index >= *summary.source_size);
   summary.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   return summary;
 }
 
 }  // namespace
+
+std::string endOfRunText(const MappingSummary& s) {
+  if (s.live) return s.interrupted ? "interrupted; the session is closed" : "end of source";
+  if (s.reached_end) return "end of source";
+  const char* why = s.interrupted ? "interrupted" : "stopped by --stop-after";
+  if (!s.source_size)
+    return fmt::format(
+        "{}; the source's length is unknown, so the next `placedb map` over it starts a new "
+        "session",
+        why);
+  return fmt::format(
+      "{}; run the same command again to resume at frame {}, before another session begins on "
+      "the map",
+      why, s.next_index);
+}
 
 MappingSummary runMapping(const MappingRequest& request) {
   using Clock = std::chrono::steady_clock;

@@ -29,7 +29,7 @@ struct MappingRequest {
   SettingsInput settings;
   std::optional<std::int64_t> stop_after;
   bool new_session = false;
-  bool quiet = false;  // no progress output, no line per accepted loop closure
+  bool quiet = false;  // no progress, start line or closure lines; the summary stays
   // A map on a server: how long to wait for the server when the connection is lost during the
   // run, before exiting with kServerLost (13). 0: at once.
   double server_wait_s = 60;
@@ -44,12 +44,19 @@ struct MappingSummary {
   std::int64_t bad = 0;            // frames recorded as bad (the unreadable ones among them)
   std::int64_t loop_closures = 0;  // frames whose loop-closure hypothesis was accepted
   std::int64_t locations_created = 0;
-  std::int64_t dropped = 0;    // a live source's frames that arrived while the engine was busy
-  bool interrupted = false;    // Ctrl-C / SIGTERM
-  bool stopped_early = false;  // --stop-after
-  bool reached_end = false;    // the source has no frame left
+  std::int64_t dropped = 0;     // a live source's frames that arrived while the engine was busy
+  bool interrupted = false;     // Ctrl-C / SIGTERM
+  bool stopped_early = false;   // --stop-after
+  bool reached_end = false;     // the source has no frame left
+  bool live = false;            // a camera or stream: never resumed
+  std::int64_t next_index = 0;  // the first frame of the source not mapped
+  std::optional<std::int64_t> source_size;  // frames in the source, when known
   double seconds = 0;
 };
+
+// Why the run ended and what the next `placedb map` over the same source does: "end of source",
+// or that it resumes at frame N (true only when it will), for the summary line.
+std::string endOfRunText(const MappingSummary& summary);
 
 MappingSummary runMapping(const MappingRequest& request);
 

@@ -274,6 +274,14 @@ bool scorePlot(const fs::path& folder, const RunSeries& s) {
   y.hi = std::max(y.hi, 1.0) * 1.45;  // headroom for the legend
   Figure figure(folder / "score.png", rangeOf(s.frame, false), y, "frame", "loop-closure score",
                 "Best hypothesis' score per frame");
+  if (!s.judged) {
+    figure.line(s.frame, s.score, kBlue);
+    figure.points(s.accepted_wrong, scoresAt(s, s.accepted_wrong), kPurple, 4);
+    figure.legend({{kBlue, "score"},
+                   {kPurple, fmt::format("accepted closure, no ground truth to judge it ({})",
+                                         s.accepted_wrong.size())}});
+    return true;
+  }
   // Two bands along the bottom: every ground-truth loop frame (grey), and under it those the
   // engine missed (orange), so a gap in the orange band is a loop found.
   const double tick = 0.04 * (y.hi - y.lo);
@@ -354,11 +362,15 @@ std::vector<WrittenPlot> writePlots(const RunSeries& s, const Evaluation& evalua
                        "score down; the green diamond is the recall at 100% precision (R@100P), "
                        "the red circle the closures the engine accepted with its own threshold"});
   if (scorePlot(folder, s))
-    written.push_back({"score.png",
-                       "the filter's best loop-closure hypothesis per frame (its score, 0..1); "
-                       "green circles the right accepted closures, red crosses the wrong ones; "
-                       "grey ticks mark frames that truly revisit a place, orange ticks those "
-                       "of them the engine missed"});
+    written.push_back(
+        {"score.png", s.judged
+                          ? "the filter's best loop-closure hypothesis per frame (its score, "
+                            "0..1); green circles the right accepted closures, red crosses the "
+                            "wrong ones; grey ticks mark frames that truly revisit a place, "
+                            "orange ticks those of them the engine missed"
+                          : "the filter's best loop-closure hypothesis per frame (its score, "
+                            "0..1); purple circles the closures the engine accepted (no ground "
+                            "truth: none is judged)"});
   if (seriesPlot(folder, "vocabulary.png", s.frame, s.vocabulary_size, "words",
                  "Vocabulary size per frame"))
     written.push_back({"vocabulary.png",

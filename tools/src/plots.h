@@ -3,7 +3,8 @@
 //   precision_recall.png   precision against recall over score thresholds, with the R@100P
 //                          point and the engine's operating point (its accepted closures)
 //   score.png              best hypothesis' score per frame; accepted closures right and wrong,
-//                          ground-truth loop frames and the missed ones marked
+//                          ground-truth loop frames and the missed ones marked (without ground
+//                          truth: the accepted closures, without a verdict)
 //   vocabulary.png         vocabulary size per frame
 //   quantisation_error.png mean quantisation error per frame
 //   wm_size.png            working-memory size per frame
@@ -21,6 +22,9 @@
 namespace placedb::cli {
 
 struct RunSeries {
+  // False without ground truth: the accepted closures (all in accepted_wrong) are shown without
+  // a verdict, and no ground-truth frame is marked.
+  bool judged = true;
   std::vector<double> frame;  // x of every series below
   std::vector<double> score, vocabulary_size, mean_quantisation_error, wm_size, time_ms;
   std::vector<double> accepted_right;  // frames whose accepted closure is right

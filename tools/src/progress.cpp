@@ -45,8 +45,8 @@ std::string ProgressReporter::statusLine() const {
   } else {
     head = fmt::format("{} frames", done_);
   }
-  return fmt::format("{}  {:.1f} frames/s  frame {}{}  locations {}  WM {}  loops {}{}", head, fps,
-                     last_.source_index,
+  return fmt::format("{}  {:.1f} frames/s  frame {}{}  new locations {}  WM {}  loops {}{}", head,
+                     fps, last_.source_index,
                      last_.source_size ? fmt::format(" of {}", *last_.source_size) : "",
                      last_.locations, last_.wm_size, last_.loop_closures,
                      last_.dropped ? fmt::format("  dropped {}", *last_.dropped) : "");

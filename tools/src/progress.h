@@ -1,6 +1,7 @@
 #pragma once
-// Progress of `placedb map` on stderr: a redrawn bar with frames/s, ETA, locations, WM size and
-// loop closures on a terminal; on a pipe or file, one plain line every 5 s or 100 frames.
+// Progress of `placedb map` on stderr: a redrawn bar with frames/s, ETA, the locations and loop
+// closures this run added and the WM size on a terminal; on a pipe or file, one plain line every
+// 5 s or 100 frames.
 #include <chrono>
 #include <cstdint>
 #include <cstdio>

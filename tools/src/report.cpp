@@ -318,10 +318,9 @@ ReportSummary writeReport(const ReportRequest& request) {
   page.session = session->id;
   page.figures = outcome.evaluation.figures;
   for (const auto& plot : outcome.plots) {
-    // Without ground truth the figures that split closures into right and wrong say nothing.
-    if (!judged && (plot.file == "precision_recall.png" || plot.file == "score.png" ||
-                    plot.file == "loop_matrix.png"))
-      continue;
+    // Without ground truth the precision-recall curve says nothing; the score per frame and
+    // the loop matrix show the accepted closures without a verdict.
+    if (!judged && plot.file == "precision_recall.png") continue;
     page.plots.push_back(
         {plot.file, plot.what,
          "data:image/png;base64," + base64Encode(readBytes(scratch.path() / plot.file))});

@@ -37,13 +37,16 @@ struct FrameRef {  // one input frame that a location covers
   std::int64_t session_id = 0;
   std::int64_t source_index = 0;
   std::string source_path;
+  std::optional<std::int64_t> stamp_ns;  // the source's stamp of the frame, when it gave one
 };
 
 struct Hypothesis {
   std::int64_t location_id = 0;  // 0: no hypothesis (empty working memory)
-  std::vector<FrameRef> frames;  // the frames that location covers
-  double posterior = 0;          // the posterior of that location
-  double score = 0;              // loop-closure probability, 1 - p(new place)
+  // The frames that location covers, by frame id: frames.front() is the location's first frame,
+  // the one whose keypoints it keeps (a merged frame adds none), so the one `pose` is relative to.
+  std::vector<FrameRef> frames;
+  double posterior = 0;  // the posterior of that location
+  double score = 0;      // loop-closure probability, 1 - p(new place)
   bool accepted = false;
   std::string rejected_reason;  // why it was not accepted; empty when accepted
   int inliers = 0;              // the geometric check's epipolar inliers (0: no check ran)
@@ -95,14 +98,16 @@ using Tier = storage::Tier;
 struct QueryMatch {  // localisation: a stored location that resembles the query image
   std::int64_t location_id = 0;
   Tier tier = Tier::kWm;
-  double similarity = 0;       // eq. 5 against its stored words (LTM: 0 until checked)
-  double code_similarity = 0;  // cosine of the place codes, any tier
-  int inliers = 0;             // the geometric check's epipolar inliers (0 when it did not run)
-  bool verified = false;       // the geometric check passed (geometry_rule)
-  std::vector<FrameRef> frames;
-  // A verified match's relative pose (the query's camera in the location's) when the map's
-  // settings and the location's session both have intrinsics, as a closure's pose.
+  double similarity = 0;         // eq. 5 against its stored words (LTM: 0 until checked)
+  double code_similarity = 0;    // cosine of the place codes, any tier
+  int inliers = 0;               // the geometric check's epipolar inliers (0 when it did not run)
+  bool verified = false;         // the geometric check passed (geometry_rule)
+  std::vector<FrameRef> frames;  // by frame id, as Hypothesis::frames
+  // A verified match's relative pose (the query's camera in that of frames.front()) when the
+  // map's settings and the location's session both have intrinsics, as a closure's pose.
   std::optional<storage::ClosurePose> pose;
+  // Why a verified match has no pose (no intrinsics, too few pairs...); empty otherwise.
+  std::string no_pose_reason;
 };
 
 // A query's answer: kKnown when its best match passed the geometric check, kUnknown when none

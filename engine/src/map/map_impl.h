@@ -89,9 +89,11 @@ class MapImpl final : public Map {
                                  const Quantised& q,
                                  const std::vector<LocationSimilarity>& similarities,
                                  FrameResult& result, FrameWrite& write, StageTimes& times);
-  // An accepted closure's relative pose when this session and the hypothesis' have intrinsics.
+  // An accepted closure's relative pose when this session and the hypothesis' have intrinsics;
+  // without one, `why` (when given) says what was missing.
   std::optional<storage::ClosurePose> closurePose(std::int64_t hypothesis,
-                                                  const GeometricResult& geometry);
+                                                  const GeometricResult& geometry,
+                                                  std::string* why = nullptr);
   CameraIntrinsics sessionIntrinsics(std::int64_t session_id);  // cached per session
   // Retrieval around the hypothesis, then transfer; memory_ms is this frame's time in the
   // stages that grow with memory, which the time budget (t_time_ms) bounds.

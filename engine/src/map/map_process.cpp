@@ -327,22 +327,43 @@ void MapImpl::acceptLoopClosure(std::int64_t hypothesis, const Verified& verifie
 }
 
 std::optional<storage::ClosurePose> MapImpl::closurePose(std::int64_t hypothesis,
-                                                         const GeometricResult& geometry) {
+                                                         const GeometricResult& geometry,
+                                                         std::string* why) {
+  const auto none = [why](std::string reason) -> std::optional<storage::ClosurePose> {
+    if (why) *why = std::move(reason);
+    return std::nullopt;
+  };
   const auto location = store_->location(hypothesis);
-  if (!location) return std::nullopt;
+  if (!location) return none(fmt::format("location {} is not stored", hypothesis));
+  const CameraIntrinsics ours = intrinsicsOf(options_);
   const CameraIntrinsics theirs = sessionIntrinsics(location->session_id);
-  if (!theirs.known()) return std::nullopt;
+  const char* no_camera = "no camera intrinsics: the map's settings fx fy cx cy are 0";
+  if (!theirs.known())
+    return none(ours.known() ? fmt::format("session {}, which mapped location {}, has no "
+                                           "camera intrinsics",
+                                           location->session_id, hypothesis)
+                             : no_camera);
   if (geometry.still) {
     // The pairs did not move: no rotation, and no translation to give a direction to.
-    if (geometry.agreeing_query.empty()) return std::nullopt;
+    if (geometry.agreeing_query.empty()) return none("no agreeing pair to measure it on");
     storage::ClosurePose pose;
     pose.inliers = static_cast<std::int64_t>(geometry.agreeing_query.size());
     return pose;
   }
+  if (!ours.known()) return none(no_camera);
   RelativePoseSettings settings;
   settings.max_error_px = options_.geometry_max_error_px;
-  return relativePose(geometry.agreeing_query, intrinsicsOf(options_), geometry.agreeing_candidate,
-                      theirs, settings);
+  auto pose =
+      relativePose(geometry.agreeing_query, ours, geometry.agreeing_candidate, theirs, settings);
+  const std::size_t pairs = geometry.agreeing_query.size();
+  if (!pose && pairs < 5)
+    return none(fmt::format("{} agreeing pairs: an essential matrix needs 5", pairs));
+  if (!pose)
+    return none(
+        fmt::format("no essential matrix puts {} of the {} agreeing pairs in front of "
+                    "both cameras",
+                    settings.min_inliers, pairs));
+  return pose;
 }
 
 CameraIntrinsics MapImpl::sessionIntrinsics(std::int64_t session_id) {
@@ -600,7 +621,7 @@ std::vector<FrameRef> MapImpl::framesOf(std::int64_t location_id) const {
   for (std::int64_t frame_id : store_->coveredFrames(location_id)) {
     auto f = store_->frame(frame_id);
     if (!f) continue;
-    out.push_back({f->id, f->session_id, f->source_index, f->source_path});
+    out.push_back({f->id, f->session_id, f->source_index, f->source_path, f->stamp_ns});
   }
   std::sort(out.begin(), out.end(),
             [](const FrameRef& a, const FrameRef& b) { return a.frame_id < b.frame_id; });

@@ -181,7 +181,7 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
         match.similarity = similarity(signature, Signature::fromWords(keypoints.words));
         match.inliers = g.inliers;
         match.verified = g.passed;
-        if (g.passed) match.pose = closurePose(id, g);
+        if (g.passed) match.pose = closurePose(id, g, &match.no_pose_reason);
         ++result.checked;
       }
     };

@@ -144,6 +144,11 @@ std::string payloadBytes(const VocabularyData& data) {
 }
 
 constexpr const char* kRtabmapHeader = "WordID Descriptors...";
+// RTAB-Map's VWDictionary::ID_START: its word 0 is ID_INVALID, so the text form numbers placedb's
+// word w as w + 1, both ways.
+constexpr std::int64_t kRtabmapIdStart = 1;
+// The largest descriptor dimension its loader takes.
+constexpr int kRtabmapMaxDimension = 1000;
 
 // The dimension a header line `WordID Descriptors...N` announces; 0 when it has no number (the
 // header RTAB-Map writes for an empty dictionary), -1 when the line is no such header.
@@ -308,13 +313,24 @@ VocabularyData readVocabularyFile(const std::filesystem::path& path,
 
 void writeVocabularyText(const std::filesystem::path& path, const VocabularyData& data) {
   checkData(data);
+  // What RTAB-Map's loader accepts: a dimension of at most 1000 and ids its int holds.
+  if (data.dim > kRtabmapMaxDimension)
+    throw Error(ErrorCode::kInvalidArgument,
+                "cannot write " + path.string() + " as an RTAB-Map dictionary: dimension " +
+                    std::to_string(data.dim) + " (RTAB-Map reads at most " +
+                    std::to_string(kRtabmapMaxDimension) + ")");
+  for (const std::int64_t id : data.ids)
+    if (id < 0 || id + kRtabmapIdStart > std::numeric_limits<std::int32_t>::max())
+      throw Error(ErrorCode::kInvalidArgument,
+                  "cannot write " + path.string() + " as an RTAB-Map dictionary: word id " +
+                      std::to_string(id) + " does not fit RTAB-Map's int ids");
   std::FILE* file = std::fopen(path.c_str(), "w");
   if (!file) writeFailed(path, "cannot write vocabulary text", errno);
   int error = 0;
   // RTAB-Map takes the descriptor dimension from the number that ends its header line.
   if (std::fprintf(file, "%s%d\n", kRtabmapHeader, data.dim) < 0) error = errno ? errno : EIO;
   for (std::size_t i = 0; i < data.ids.size() && error == 0; ++i) {
-    bool ok = std::fprintf(file, "%lld", static_cast<long long>(data.ids[i])) > 0;
+    bool ok = std::fprintf(file, "%lld", static_cast<long long>(data.ids[i] + kRtabmapIdStart)) > 0;
     const float* row = data.descriptors.ptr<float>(int(i));
     for (int d = 0; d < data.dim && ok; ++d) ok = std::fprintf(file, " %.9g", row[d]) > 0;
     ok = ok && std::fputc('\n', file) != EOF;
@@ -349,6 +365,10 @@ VocabularyData readVocabularyText(const std::filesystem::path& path, int expecte
     errno = 0;
     const long long id = std::strtoll(at, &end, 10);
     if (end == at || errno != 0 || id < 0) refuse(path, where + "bad word id");
+    if (id < kRtabmapIdStart)
+      refuse(path, where +
+                       "word id 0: RTAB-Map's word ids start at 1, 0 being its invalid id "
+                       "(older placedb exports started at 0: add 1 to each id)");
     std::vector<float> row;
     for (at = end;;) {
       while (*at == ' ' || *at == '\t' || *at == '\r') ++at;
@@ -363,7 +383,7 @@ VocabularyData readVocabularyText(const std::filesystem::path& path, int expecte
       refuse(path,
              where + std::to_string(row.size()) + " values, expected " + std::to_string(data.dim));
     }
-    data.ids.push_back(id);
+    data.ids.push_back(id - kRtabmapIdStart);
     data.created_frames.push_back(-1);
     values.insert(values.end(), row.begin(), row.end());
   }

@@ -16,9 +16,13 @@
 //
 // The text form is RTAB-Map's dictionary (VWDictionary::exportDictionary, and what its fixed
 // dictionary loader reads): a header line `WordID Descriptors...N` giving the dimension, then one
-// word a line, "WordID d1 ... dN". placedb writes the floats in %.9g so that they read back bit
-// for bit (RTAB-Map's own %f files read too). It holds no created frames (read back as -1). The
-// reader also takes files without the header line, the dimension then being the first line's.
+// word a line, "WordID d1 ... dN", single spaces. Its word ids start at 1 (RTAB-Map's
+// VWDictionary::ID_START; 0 is its invalid id): placedb's word w is written as w + 1 and read
+// back as w, so an RTAB-Map file's first word becomes placedb's word 0 and export -> import ->
+// export gives the same file. A word id 0 is refused. placedb writes the floats in %.9g so that
+// they read back bit for bit (RTAB-Map's own %f files read too). It holds no created frames (read
+// back as -1). The reader also takes files without the header line, the dimension then being
+// the first line's.
 #include <cstdint>
 #include <filesystem>
 #include <map>
