@@ -226,8 +226,9 @@ TEST(ClosureEvidenceRuns, RunsPassWhereNoFrameCouldAndResumeExactly) {
     if (!f.accepted || f.evidence_frames < 2) continue;
     // Too weak alone: above the check's bar (the default rule is a contrario alone, so a
     // count of inliers is no bar of its own).
-    if (options.geometry_rule != GeometryRule::kNfa)
+    if (options.geometry_rule != GeometryRule::kNfa) {
       EXPECT_LT(f.inliers, options.geometry_min_inliers) << "frame " << i;
+    }
     EXPECT_GT(f.log10_nfa, std::log10(options.geometry_max_nfa)) << "frame " << i;
     by_runs.insert(i);
     stops.insert(i - 1);  // the map reopens between the run's frames
