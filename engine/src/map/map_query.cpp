@@ -171,6 +171,9 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
     view.codes = std::make_shared<const DescriptorCodes>(
         quantiseDescriptors(features.descriptors, kQueryCodeLevels));
     auto check = [&](const std::vector<LocationId>& which) {
+      // A verdict chooses among every place checked so far: their false alarms all count.
+      if (options_.geometry_count_candidates)
+        geometry.tests = std::max(1, static_cast<int>(candidates.size()));
       for (LocationId id : which) {
         // Read from the file, not the mapping's cache: a query may touch any location.
         const CachedKeypoints keypoints = loadKeypoints(id);
