@@ -54,7 +54,7 @@ struct Hypothesis {
   // The check's false alarms, log10, counted over every place the frame could have accepted
   // (geometry_count_candidates) as its acceptance was (0: no check; 99: no model).
   double log10_nfa = 0;
-  int candidates_checked = 0;   // locations the geometric check ran on this frame
+  int candidates_checked = 0;  // locations the geometric check ran on this frame
   // Frames whose checks the decision combined: 1 = this frame's alone, more when a run of
   // frames matching consecutive places passed together (SPEC's terms: bench/quality/README.md);
   // 0 when no check ran.
