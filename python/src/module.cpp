@@ -195,6 +195,7 @@ void bindResults(py::module_& m) {
       .def_readonly("session_id", &FrameRef::session_id)
       .def_readonly("source_index", &FrameRef::source_index)
       .def_readonly("source_path", &FrameRef::source_path)
+      .def_readonly("stamp_ns", &FrameRef::stamp_ns)
       .def("__repr__", [](const FrameRef& f) {
         return fmt::format("FrameRef(session={}, index={}, path='{}')", f.session_id,
                            f.source_index, f.source_path);

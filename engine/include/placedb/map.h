@@ -37,6 +37,7 @@ struct FrameRef {  // one input frame that a location covers
   std::int64_t session_id = 0;
   std::int64_t source_index = 0;
   std::string source_path;
+  std::optional<std::int64_t> stamp_ns;  // the stamp given to process() for that frame
 };
 
 struct Hypothesis {

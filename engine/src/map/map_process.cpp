@@ -580,7 +580,7 @@ std::vector<FrameRef> MapImpl::framesOf(std::int64_t location_id) const {
   for (std::int64_t frame_id : store_->coveredFrames(location_id)) {
     auto f = store_->frame(frame_id);
     if (!f) continue;
-    out.push_back({f->id, f->session_id, f->source_index, f->source_path});
+    out.push_back({f->id, f->session_id, f->source_index, f->source_path, f->stamp_ns});
   }
   std::sort(out.begin(), out.end(),
             [](const FrameRef& a, const FrameRef& b) { return a.frame_id < b.frame_id; });
