@@ -53,7 +53,7 @@ Service:
 Parameters:
   ~map (string, required)     the map: a file (absolute: roslaunch runs nodes in ~/.ros) or a
                               postgresql:// URI of a map on a server
-  ~settings (dict or string)  engine settings, {t_loop: 0.1} or "t_loop=0.1 wm_max=300"
+  ~settings (dict or string)  engine settings, {{t_loop: 0.1}} or "t_loop=0.1 wm_max=300"
                               (`placedb settings` lists them); win over ~config and ~preset
   ~config, ~preset, ~calibration (string)  as `placedb map --config/--preset/--calibration`
   ~camera_info_wait (double, 5)  seconds to wait for camera_info before a new session begins

@@ -12,6 +12,8 @@
    and ends with the CLI's closures, log and one cleanly closed session.
 3. rtabmap_samples published as fast as possible into a node that drops frames: every frame is
    either mapped or counted as dropped.
+4. rtabmap_samples' first 30 frames into a map on ctest's PostgreSQL server, the intrinsics
+   given in ~settings: the log equals the CLI's first 30 rows.
 
 Exit 77 (ctest: skipped) with a message where ROS 1, the node or the data sets are absent.
 Usage: ros_node_test.py PLACEDB NODE PACKAGE_DIR MSGS_PYTHON_DIR LAUNCH_FILE WORK_DIR DATASETS
@@ -125,6 +127,18 @@ def db_rows(path, sql):
         return db.execute(sql).fetchall()
 
 
+def server_map(name):
+    """A fresh database on ctest's PostgreSQL server, or None (said) when there is none."""
+    uri_file = os.environ.get('PLACEDB_TEST_PG_URI_FILE', '')
+    line = open(uri_file).read().strip() if uri_file and os.path.exists(uri_file) else ''
+    if not line.startswith('postgresql://'):
+        print(f'skipped: a map on a server: no PostgreSQL server ({line or "run through ctest"})')
+        return None
+    for sql in (f'DROP DATABASE IF EXISTS {name} WITH (FORCE)', f'CREATE DATABASE {name}'):
+        subprocess.run(['psql', line, '-XAtqc', sql], check=True, capture_output=True)
+    return line.replace('/placedb?', f'/{name}?')
+
+
 def free_port():
     with socket.socket() as s:
         s.bind(('127.0.0.1', 0))
@@ -216,6 +230,13 @@ def main(argv):
                 return False
         wait_until(master_up, 'rosmaster')
         rospy.init_node('ros_node_test', disable_signals=True)
+        helped = subprocess.run([node, '--help'], capture_output=True, text=True)
+        check(helped.returncode == 0 and '~loop_closures' in helped.stdout and
+              'Exit status' in helped.stdout, 'placedb_node --help: topics, parameters, exits')
+        unset = subprocess.run([node, '__name:=placedb_unset'], capture_output=True, text=True)
+        check(unset.returncode == 2 and unset.stderr.count('\n') == 1 and
+              '~map is not set' in unset.stderr,
+              f'no ~map: exit {unset.returncode} (expected 2), {unset.stderr.strip()}')
 
         # 1. rtabmap_samples: roslaunch + rosbag play.
         t0 = time.monotonic()
@@ -340,6 +361,29 @@ def main(argv):
               f'drop_frames: {mapped} frames mapped + {done.dropped} dropped = {len(rtab)} '
               f'published')
         print(f'dropping frames: {time.monotonic() - t0:.1f} s', flush=True)
+        # 4. A map on a PostgreSQL server (ctest's pg_server fixture), intrinsics in ~settings.
+        t0 = time.monotonic()
+        uri = server_map('ros_node_test')
+        if uri:
+            listener = Listener(rospy, msgs, 'placedb_pg')
+            pub = rospy.Publisher('/pg/image/compressed', CompressedImage, queue_size=1000)
+            process = subprocess.Popen(
+                [node, 'image:=/pg/image/compressed', '__name:=placedb_pg', f'_map:={uri}',
+                 f'_log:={w("node_pg.csv")}', '_drop_frames:=false',
+                 '_settings:=fx=420 fy=420 cx=256 cy=192'],
+                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            wait_until(lambda: listener.connected() and pub.get_num_connections() > 0,
+                       'the server map node to connect')
+            for message in rtab[:30]:
+                pub.publish(message)
+            wait_until(lambda: listener.seen(29), 'the server map node to map frame 29')
+            stop(process, 'server map node')
+            pub.unregister()
+            listener.close()
+            with open(w('cli_rtab.csv')) as f, open(w('cli_rtab_30.csv'), 'w') as out:
+                out.writelines(f.readlines()[:31])
+            same_log(w('node_pg.csv'), w('cli_rtab_30.csv'), 'a map on a server, 30 frames')
+            print(f'a map on a server: {time.monotonic() - t0:.1f} s', flush=True)
     finally:
         rospy_module = sys.modules.get('rospy')
         if rospy_module:
