@@ -19,6 +19,12 @@ packages=(
   # ROS 1 bags: the ROS project's reader and the headers its pluginlib include needs on Debian 12
   librosbag-storage-dev libclass-loader-dev librcpputils-dev librcutils-dev libament-index-cpp-dev
   python3-rosbag python3-sensor-msgs  # the tests write ROS 1 bags with ROS's own Python writer
+  # The ROS 1 node (ros/): roscpp, topic_tools, the message definitions and ROS's generators;
+  # its test runs rosmaster, roslaunch and rosbag play
+  libroscpp-dev libtopic-tools-dev libsensor-msgs-dev libgeometry-msgs-dev libstd-msgs-dev
+  ros-std-msgs ros-geometry-msgs ros-sensor-msgs python3-gencpp python3-genpy
+  python3-rosmaster python3-roslaunch python3-rostopic python3-rosservice
+  python3-venv  # `pip install ./python` in a fresh venv (tests/python)
 )
 if [[ "${1:-}" == "--fuzz" ]]; then
   packages+=(clang-14 libclang-rt-14-dev)

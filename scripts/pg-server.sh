@@ -10,6 +10,10 @@
 #   scripts/pg-server.sh stop DIR immediate   # without a shutdown checkpoint, for a DIR about
 #                                    # to be deleted (a restart would recover it like a crash)
 #   scripts/pg-server.sh uri DIR     # print the URI again
+#   scripts/pg-server.sh standby PRIMARY_DIR DIR [DB]   # a hot standby of the server in
+#                                    # PRIMARY_DIR: streaming replication from a pg_basebackup -R
+#                                    # copy, in DIR, read-only; prints the URI of its database DB
+#                                    # (default placedb; stop it with stop DIR)
 #
 # The server listens on a Unix socket inside DIR only (listen_addresses=''), so it never clashes
 # with another server's TCP port. Its owner, postgres, connects without a password; any other
@@ -21,7 +25,8 @@
 set -euo pipefail
 
 usage() {
-  echo "usage: $0 start [DIR [DB]] | createdb DIR DB | stop DIR | uri DIR" >&2
+  echo "usage: $0 start [DIR [DB]] | createdb DIR DB | stop DIR | uri DIR |" \
+    "standby PRIMARY_DIR DIR [DB]" >&2
   exit 2
 }
 
@@ -53,6 +58,36 @@ as_owner() {
   fi
 }
 
+# Makes DIR (absolute from here on) the server's: as root, postgres's, and reachable by it.
+own_dir() {
+  mkdir -p "$dir"
+  dir=$(cd "$dir" && pwd)
+  if [[ $(id -u) -eq 0 ]]; then
+    if ! id postgres >/dev/null 2>&1; then
+      echo "pg-server: running as root needs the postgres user (Debian's postgresql package)" >&2
+      exit 3
+    fi
+    chown postgres: "$dir"
+    chmod 0755 "$dir"
+    # The server's user must reach DIR through every folder above it.
+    parent=$(dirname "$dir")
+    while [[ "$parent" != "/" ]]; do
+      chmod o+x "$parent" 2>/dev/null || true
+      parent=$(dirname "$parent")
+    done
+  fi
+}
+
+# Starts the server of DIR/data, listening on a socket in DIR only.
+run_server() {
+  as_owner "$bin/pg_ctl" -D "$dir/data" -l "$dir/server.log" -w -t 60 \
+    -o "-c listen_addresses='' -c unix_socket_directories='$dir'" start \
+    >/dev/null || {
+    echo "pg-server: the server did not start; see $dir/server.log" >&2
+    exit 1
+  }
+}
+
 [[ $# -ge 1 ]] || usage
 command=$1
 dir=${2:-}
@@ -61,41 +96,22 @@ case "$command" in
   start)
     bin=$(find_bin)
     if [[ -z "$dir" ]]; then dir=$(mktemp -d /tmp/placedb-pg.XXXXXX); fi
-    mkdir -p "$dir"
-    dir=$(cd "$dir" && pwd)
-    if [[ $(id -u) -eq 0 ]]; then
-      if ! id postgres >/dev/null 2>&1; then
-        echo "pg-server: running as root needs the postgres user (Debian's postgresql package)" >&2
-        exit 3
-      fi
-      chown postgres: "$dir"
-      chmod 0755 "$dir"
-      # The server's user must reach DIR through every folder above it.
-      parent=$(dirname "$dir")
-      while [[ "$parent" != "/" ]]; do
-        chmod o+x "$parent" 2>/dev/null || true
-        parent=$(dirname "$parent")
-      done
-    fi
+    own_dir
     if [[ ! -f "$dir/data/PG_VERSION" ]]; then
       as_owner "$bin/initdb" -D "$dir/data" -A trust -E UTF8 --locale=C.UTF-8 >"$dir/initdb.log" 2>&1 ||
         {
           echo "pg-server: initdb failed; see $dir/initdb.log" >&2
           exit 1
         }
-      # The socket only: the server's owner without a password, every other role (a robot's,
-      # made with CREATE ROLE ... PASSWORD) with its password.
-      printf '%s\n' "local all postgres trust" "local all all scram-sha-256" \
-        | as_owner tee "$dir/data/pg_hba.conf" >/dev/null
+      # The socket only: the server's owner without a password (also for a standby's
+      # replication connection), every other role (a robot's, made with CREATE ROLE ...
+      # PASSWORD) with its password.
+      printf '%s\n' "local all postgres trust" "local replication postgres trust" \
+        "local all all scram-sha-256" | as_owner tee "$dir/data/pg_hba.conf" >/dev/null
     fi
     # A server already running in DIR is used as it is: start may be run again.
     if ! as_owner "$bin/pg_ctl" -D "$dir/data" status >/dev/null 2>&1; then
-      as_owner "$bin/pg_ctl" -D "$dir/data" -l "$dir/server.log" -w -t 60 \
-        -o "-c listen_addresses='' -c unix_socket_directories='$dir'" start \
-        >/dev/null || {
-        echo "pg-server: the server did not start; see $dir/server.log" >&2
-        exit 1
-      }
+      run_server
     fi
     db=${3:-placedb}
     # createdb fails when the database exists (a restart): that is fine.
@@ -112,6 +128,33 @@ case "$command" in
       exit 1
     }
     uri_of "$dir" "$3"
+    ;;
+  standby)
+    # A hot standby: a base backup of the primary's running server with -R (standby.signal and
+    # primary_conninfo), which then streams the primary's WAL and serves reads only.
+    [[ $# -eq 3 || $# -eq 4 ]] || usage
+    bin=$(find_bin)
+    primary=$(cd "$2" && pwd)
+    dir=$3
+    if [[ ! -S "$primary/.s.PGSQL.5432" ]]; then
+      echo "pg-server: no server runs in $primary (start it first: $0 start $primary)" >&2
+      exit 3
+    fi
+    # A primary made before standbys were offered lacks the replication line: add it.
+    if ! grep -q "^local replication postgres trust" "$primary/data/pg_hba.conf"; then
+      sed -i '1i local replication postgres trust' "$primary/data/pg_hba.conf"
+      as_owner "$bin/pg_ctl" -D "$primary/data" reload >/dev/null
+    fi
+    own_dir
+    if [[ ! -f "$dir/data/PG_VERSION" ]]; then
+      as_owner "$bin/pg_basebackup" -h "$primary" -U postgres -D "$dir/data" -R -X stream -c fast \
+        >"$dir/basebackup.log" 2>&1 || {
+        echo "pg-server: pg_basebackup from $primary failed; see $dir/basebackup.log" >&2
+        exit 1
+      }
+    fi
+    run_server
+    uri_of "$dir" "${4:-placedb}"
     ;;
   stop)
     [[ -n "$dir" ]] || usage

@@ -83,6 +83,13 @@ PgMapStore::PgMapStore(const std::string& uri, OpenMode mode, const OpenOptions&
                                                      "; open it read-write once to upgrade it");
     return;
   }
+  // A hot standby (a read replica: in recovery) serves reads only. Said before any lock is
+  // taken or write tried, in one line instead of the server's "read-only transaction".
+  if (db_->queryInt("SELECT pg_is_in_recovery()::int") != 0)
+    throw StorageError(ErrorCode::kReadOnly,
+                       "map " + label_ +
+                           " is on a hot standby (a read-only replica): it answers query, info, "
+                           "export and report; map into (or write) its primary server");
   // Session-level: held until this connection closes, released by the server if the writer
   // dies, so a killed writer never leaves the map locked.
   if (!claimMainLine() && !options.side_writer)

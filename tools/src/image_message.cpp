@@ -60,11 +60,11 @@ class Cursor {
   }
 
   // std_msgs/Header: ROS 1 starts with a sequence number; the stamp is two 32-bit halves.
-  std::int64_t header() {
+  std::int64_t header(std::string& frame_id) {
     if (format_ == WireFormat::kRos1) u32();  // seq
     const std::int64_t sec = format_ == WireFormat::kCdr ? std::int32_t(u32()) : u32();
     const std::int64_t nsec = u32();
-    string();  // frame_id
+    frame_id = string();
     return sec * 1000000000 + nsec;
   }
 
@@ -149,7 +149,7 @@ DecodedImage decodeImageMessage(const std::uint8_t* data, std::size_t size, Imag
   DecodedImage out;
   try {
     Cursor in(data, size, format);
-    out.stamp_ns = in.header();
+    out.stamp_ns = in.header(out.frame_id);
     if (kind == ImageMessageKind::kRaw) {
       const std::uint32_t height = in.u32(), width = in.u32();
       out.encoding = in.string();

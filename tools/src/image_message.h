@@ -23,6 +23,7 @@ std::optional<ImageMessageKind> imageMessageKind(const std::string& type);
 struct DecodedImage {
   cv::Mat image;                         // BGR or grey, 8 bits; empty when `problem` is set
   std::optional<std::int64_t> stamp_ns;  // header.stamp
+  std::string frame_id;                  // header.frame_id
   std::string encoding;                  // a raw image's encoding, or a compressed one's format
   std::string problem;
 };

@@ -43,7 +43,8 @@ class ImageSource {
 
   // Canonical absolute path: resuming compares it with the session's stored source.
   virtual const std::string& canonicalPath() const = 0;
-  virtual std::string kind() const = 0;  // "folder", "list", "video", "bag" or "live"
+  // "folder", "list", "video", "bag", "live" or "topic" (a ROS topic: ros/src/topic_source.h)
+  virtual std::string kind() const = 0;
   // Number of frames, when known (a video's count is the container's estimate).
   virtual std::optional<std::int64_t> size() const = 0;
   // The next frame read() returns is `index`.

@@ -21,7 +21,13 @@
 namespace placedb::cli {
 namespace {
 
+// A camera, a stream or a ROS topic does not wait for the engine.
+bool dropsFrames(const ImageSource& source) {
+  return source.kind() == "live" || source.kind() == "topic";
+}
+
 bool sameSource(const std::string& stored, const std::string& canonical) {
+  if (stored == canonical) return true;  // also a name that is not a path (a ROS topic's)
   std::error_code ec;
   auto resolved = std::filesystem::weakly_canonical(stored, ec);
   return (ec ? std::filesystem::path(stored) : resolved).string() == canonical;
@@ -41,7 +47,7 @@ std::optional<std::int64_t> resumeIndex(const storage::SessionRecord& last,
   if (source.kind() == "live" || !sameSource(last.source, source.canonicalPath()))
     return std::nullopt;  // a camera's frames are never the same twice
   const std::int64_t next = last_index ? *last_index + 1 : 0;
-  if (last.clean_close) {
+  if (last.clean_close && source.kind() != "topic") {
     // A source of unknown length cannot tell whether it was finished: treat it as finished.
     auto size = source.size();
     if (!size || next >= *size) return std::nullopt;
@@ -242,7 +248,8 @@ struct OpeningLost {
 MappingSummary runOnce(const MappingRequest& request, std::chrono::steady_clock::time_point started,
                        bool reached) {
   // Everything that can be refused is checked before the map file is touched.
-  auto source = ImageSource::open(request.source, request.source_options);
+  std::shared_ptr<ImageSource> source = request.opened_source;
+  if (!source) source = ImageSource::open(request.source, request.source_options);
   Options options = resolveOptions(request.settings);
   const ResumeDecision decision = sessionToResume(request.map_path, *source, request.new_session);
   std::optional<ResumePoint> resume = decision.resume;
@@ -386,10 +393,11 @@ MappingSummary runOnce(const MappingRequest& request, std::chrono::steady_clock:
       }
     }
     if (log) log->write(result);
+    if (request.on_frame) request.on_frame(frame, result);
     if (progress)
       progress->update({frame.index, summary.locations_created,
                         static_cast<std::int64_t>(result.wm_size), summary.loop_closures,
-                        source->kind() == "live" ? std::optional(source->dropped()) : std::nullopt,
+                        dropsFrames(*source) ? std::optional(source->dropped()) : std::nullopt,
                         source->size()});
   }
   summary.dropped = source->dropped();

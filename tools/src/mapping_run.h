@@ -5,18 +5,23 @@
 // Resume rule: when the map's last session ran over the same source (canonical absolute paths)
 // and either was interrupted (not closed cleanly) or stopped before the source's end (a clean
 // close after --stop-after or Ctrl-C), that session continues with the first frame not yet
-// processed; otherwise a new session begins. --new-session forces a new one. On a fleet map
-// (a server map with several writers) the session is the newest over the same source whose
-// memory the map keeps: the main line's newest, or a side session of its own.
+// processed; otherwise a new session begins. A camera or stream never resumes (its frames are
+// never the same twice); a ROS topic always does (it has no end: a clean close is a shutdown).
+// --new-session forces a new one. On a fleet map (a server map with several writers) the session is
+// the newest over the same source whose memory the map keeps: the main line's newest, or a side
+// session of its own.
 //
 // A map on a server whose connection is lost mid-run (a server restart, the network): the run
 // waits up to server_wait_s for it, reopens the map and resumes the session as a new run would,
 // from the first frame the map does not hold; then kServerLost.
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 
 #include "image_source.h"
+#include "placedb/map.h"
 #include "settings_input.h"
 
 namespace placedb::cli {
@@ -33,6 +38,11 @@ struct MappingRequest {
   // A map on a server: how long to wait for the server when the connection is lost during the
   // run, before exiting with kServerLost (13). 0: at once.
   double server_wait_s = 60;
+  // A source the caller opened (the ROS node's topic, ros/src/topic_source.h); `source` is then
+  // its name in messages only. Null: runMapping opens `source`.
+  std::shared_ptr<ImageSource> opened_source;
+  // Called with each frame once it is committed and logged (the ROS node publishes it).
+  std::function<void(const SourceFrame&, const FrameResult&)> on_frame;
 };
 
 struct MappingSummary {
