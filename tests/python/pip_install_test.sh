@@ -38,4 +38,4 @@ keys = {s["key"] for s in placedb.settings()}
 assert "t_loop" in keys, sorted(keys)[:5]
 print("import placedb:", placedb.__file__)
 PY
-"$work/venv/bin/python3" -m pip show placedb | head -2
+"$work/venv/bin/python3" -m pip show placedb

@@ -166,6 +166,27 @@ class Listener:
             s.unregister()
 
 
+# Every process the test starts, each in a session of its own, so that a failure anywhere still
+# ends them and their children (roslaunch's nodes) rather than leaving them to the next test.
+CHILDREN = []
+
+
+def spawn(args, **kwargs):
+    process = subprocess.Popen(args, start_new_session=True, **kwargs)
+    CHILDREN.append(process)
+    return process
+
+
+def end_children():
+    for process in CHILDREN:
+        if process.poll() is None:
+            try:
+                os.killpg(process.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            process.wait()
+
+
 def stop(process, what, sig=signal.SIGINT):
     process.send_signal(sig)
     try:
@@ -218,7 +239,7 @@ def main(argv):
                         w(f'cli_{name}.csv'), '-q', *extra], check=True)
     print(f'bags and CLI runs: {time.monotonic() - started:.1f} s', flush=True)
 
-    master = subprocess.Popen(['rosmaster', '--core', '-p', str(port)],
+    master = spawn(['rosmaster', '--core', '-p', str(port)],
                               stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
     try:
         proxy = xmlrpc.client.ServerProxy(master_uri)
@@ -241,7 +262,7 @@ def main(argv):
         # 1. rtabmap_samples: roslaunch + rosbag play.
         t0 = time.monotonic()
         listener = Listener(rospy, msgs, 'placedb')
-        launch = subprocess.Popen(
+        launch = spawn(
             ['roslaunch', launch_file, f'map:={w("node_rtab.placedb")}',
              'image:=/cam/image/compressed', 'camera_info:=/cam/camera_info',
              'drop_frames:=false', f'log:={w("node_rtab.csv")}', 'camera_info_wait:=120'],
@@ -308,7 +329,7 @@ def main(argv):
         for first, last, end in ((0, 149, 'kill'), (150, 299, 'shutdown')):
             listener = Listener(rospy, msgs, 'placedb_lip6')
             pub = rospy.Publisher('/lip6/image/compressed', CompressedImage, queue_size=1000)
-            process = subprocess.Popen(node_args, stdout=subprocess.PIPE,
+            process = spawn(node_args, stdout=subprocess.PIPE,
                                        stderr=subprocess.STDOUT, text=True)
             wait_until(lambda: listener.connected() and pub.get_num_connections() > 0,
                        'the lip6 node to connect')
@@ -343,7 +364,7 @@ def main(argv):
                 if topic == '/cam/image/compressed']
         listener = Listener(rospy, msgs, 'placedb_drop')
         pub = rospy.Publisher('/drop/image/compressed', CompressedImage, queue_size=1000)
-        process = subprocess.Popen([node, 'image:=/drop/image/compressed', '__name:=placedb_drop',
+        process = spawn([node, 'image:=/drop/image/compressed', '__name:=placedb_drop',
                                     f'_map:={w("node_drop.placedb")}', '_camera_info_wait:=0'],
                                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         wait_until(lambda: listener.connected() and pub.get_num_connections() > 0,
@@ -367,7 +388,7 @@ def main(argv):
         if uri:
             listener = Listener(rospy, msgs, 'placedb_pg')
             pub = rospy.Publisher('/pg/image/compressed', CompressedImage, queue_size=1000)
-            process = subprocess.Popen(
+            process = spawn(
                 [node, 'image:=/pg/image/compressed', '__name:=placedb_pg', f'_map:={uri}',
                  f'_log:={w("node_pg.csv")}', '_drop_frames:=false',
                  '_settings:=fx=420 fy=420 cx=256 cy=192'],
@@ -390,6 +411,7 @@ def main(argv):
             rospy_module.signal_shutdown('test over')
         master.terminate()
         master.wait()
+        end_children()
     print(f'total {time.monotonic() - started:.1f} s; ' +
           (f'{len(FAILURES)} FAILED' if FAILURES else 'all passed'), flush=True)
     return 1 if FAILURES else 0
