@@ -12,7 +12,7 @@
 #include <nmmintrin.h>
 #endif
 
-#include "database.h"
+#include "sqlite/database.h"
 
 namespace placedb::storage::detail {
 namespace {
