@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <cstring>
 
+#include "backends.h"
 #include "placedb/storage/migrations.h"
 #include "placedb/storage/sqlite_map_store.h"
-#include "postgres/pg_map_store.h"
 
 namespace placedb::storage {
 

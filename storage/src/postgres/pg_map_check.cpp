@@ -6,7 +6,7 @@
 #include <cstring>
 #include <map>
 
-#include "placedb/storage/map_check.h"
+#include "backends.h"
 #include "placedb/storage/migrations.h"
 #include "postgres/pg_connection.h"
 #include "postgres/pg_map_store.h"
@@ -20,7 +20,7 @@ bool sumMatches(const detail::PgResult& r, int row, int column, std::uint32_t co
 }
 
 // A kd-forest node row of kd_nodes or session_kd_nodes: tree, node, left and right child, split
-// dimension and value from column `first` on, then its checksum (as map_check.cpp's).
+// dimension and value from column `first` on, then its checksum (as sqlite_map_check.cpp's).
 bool kdNodeMatches(const detail::PgResult& r, int row, int first) {
   return sumMatches(r, row, first + 6,
                     detail::kdNodeChecksum(r.integer(row, first), r.integer(row, first + 1),

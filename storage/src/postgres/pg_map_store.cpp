@@ -1,6 +1,7 @@
 // PgMapStore: opening (identity, migrations, the writer's lock), sessions, frames and locations.
 #include "postgres/pg_map_store.h"
 
+#include "backends.h"
 #include "placedb/storage/migrations.h"
 #include "row_checksums.h"
 

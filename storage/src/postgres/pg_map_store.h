@@ -221,7 +221,4 @@ class PgMapStore final : public MapStore {
   std::set<std::int64_t> claimed_;  // sessions whose lock this writer holds
 };
 
-std::unique_ptr<MapStore> openPgMapStore(const std::string& uri, OpenMode mode,
-                                         const OpenOptions& options);
-
 }  // namespace placedb::storage

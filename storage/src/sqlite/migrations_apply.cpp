@@ -1,12 +1,10 @@
 #include <filesystem>
 
 #include "placedb/storage/migrations.h"
-#include "row_checksums.h"
 #include "sqlite/migrations_apply.h"
+#include "sqlite/sqlite_checksums.h"
 
 namespace placedb::storage {
-
-int currentSchemaVersion() { return migrations().empty() ? 0 : migrations().back().version; }
 
 namespace detail {
 

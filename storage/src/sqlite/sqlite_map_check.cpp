@@ -1,5 +1,5 @@
 // placedb check: every page, key and checksum of a map, without writing.
-#include "placedb/storage/map_check.h"
+#include "backends.h"
 
 #include <cmath>
 #include <cstring>
@@ -10,9 +10,9 @@
 #include "placedb/storage/map_files.h"
 #include "placedb/storage/map_store.h"
 #include "placedb/storage/migrations.h"
-#include "row_checksums.h"
 #include "sqlite/database.h"
 #include "sqlite/map_file_check.h"
+#include "sqlite/sqlite_checksums.h"
 
 namespace placedb::storage {
 namespace {
@@ -239,8 +239,7 @@ std::unique_ptr<Database> openCheckConnection(const std::string& path, bool* wri
 
 }  // namespace
 
-CheckReport checkMap(const std::string& given_path, const CheckOptions& options) {
-  if (isServerMap(given_path)) return checkPgMap(given_path, options);
+CheckReport checkSqliteMap(const std::string& given_path, const CheckOptions& options) {
   const std::string path = detail::resolveMapPath(given_path);
   const detail::FileState state = detail::checkRawFile(path);
   if (state == detail::FileState::kMissing)

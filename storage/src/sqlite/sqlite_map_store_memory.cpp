@@ -2,8 +2,8 @@
 #include <cstring>
 
 #include "placedb/storage/sqlite_map_store.h"
-#include "row_checksums.h"
 #include "sqlite/database.h"
+#include "sqlite/sqlite_checksums.h"
 
 namespace placedb::storage {
 

@@ -3,8 +3,8 @@
 #include <nlohmann/json.hpp>
 
 #include "placedb/storage/sqlite_map_store.h"
-#include "row_checksums.h"
 #include "sqlite/database.h"
+#include "sqlite/sqlite_checksums.h"
 #include "sqlite/sqlite_rows.h"
 
 namespace placedb::storage {

@@ -7,8 +7,8 @@
 #include <string>
 
 #include "placedb/storage/sqlite_map_store.h"
-#include "row_checksums.h"
 #include "sqlite/database.h"
+#include "sqlite/sqlite_checksums.h"
 #include "sqlite/sqlite_rows.h"
 
 namespace placedb::storage {
