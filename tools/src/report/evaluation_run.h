@@ -1,5 +1,5 @@
 #pragma once
-// `placedb eval`: scoring a log, shared with `placedb demo`.
+// A log scored and plotted: what `placedb eval`, `placedb demo` and the report run.
 #include <filesystem>
 #include <optional>
 #include <string>

@@ -2,6 +2,7 @@
 # and the pose graph's export.
 target_sources(placedb_cli PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/eval.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/evaluation_run.cpp
   ${CMAKE_CURRENT_LIST_DIR}/plots.cpp
   ${CMAKE_CURRENT_LIST_DIR}/loop_matrix.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_series.cpp
