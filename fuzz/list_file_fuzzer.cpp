@@ -1,4 +1,4 @@
-// libFuzzer target: the command line's list-file parser (tools/src/image_source.cpp,
+// libFuzzer target: the command line's list-file parser (tools/src/sources/image_source.cpp,
 // placedb::cli::readListFile). The contract: a placedb::Error, or paths that are non-empty,
 // free of newlines and never comment lines.
 #include <unistd.h>
@@ -8,8 +8,8 @@
 #include <fstream>
 #include <string>
 
-#include "image_source.h"
 #include "placedb/error.h"
+#include "sources/image_source.h"
 
 namespace {
 

@@ -22,31 +22,15 @@ add_custom_command(
   VERBATIM)
 
 target_sources(placedb_storage PRIVATE
-  ${CMAKE_CURRENT_LIST_DIR}/src/database.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/map_check.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/map_file_check.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/map_files.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/migrations.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_store.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_memory.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_words.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_links.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_state.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_tables.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/sqlite_map_store_fleet.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/map_check.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/migrations.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_copy.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/records.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/row_checksums.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/wal_checkpointer.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/pg_connection.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_check.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/pg_pipeline.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_store.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_store_words.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_store_state.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_store_tables.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_store_fleet.cpp
   ${PLACEDB_MIGRATIONS_CPP}
   ${PLACEDB_PG_MIGRATIONS_CPP})
+# Includes are written from src/ ("sqlite/database.h"); each backend's room lists its own files.
 target_include_directories(placedb_storage PRIVATE ${CMAKE_CURRENT_LIST_DIR}/src)
+include(${CMAKE_CURRENT_LIST_DIR}/src/sqlite/sources.cmake)
+include(${CMAKE_CURRENT_LIST_DIR}/src/postgres/sources.cmake)

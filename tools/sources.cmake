@@ -7,39 +7,18 @@ add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/exit_codes.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/text_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/interrupt.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/image_source.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/image_message.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/bag_source.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/ros1_bag.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/ros2_bag.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/live_source.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/settings_input.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/calibration_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/frame_log.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/frame_names.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/progress.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/eval.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/plots.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/loop_matrix.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/run_series.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/base64.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/report.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/report_page.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/mapping_run.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_map.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_query.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_info.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_check.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_vocab.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_eval.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_demo.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/graph_export.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/pose_track.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_export.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_copy.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_argument.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/output_guard.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/cmd_report.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/src/output_guard.cpp)
+# Those are the plumbing every room may use; the rooms list their own files. Includes are written
+# from src/ ("sources/image_source.h"), as the tests, benches, fuzzers and bindings write them.
+include(${CMAKE_CURRENT_LIST_DIR}/src/sources/sources.cmake)
+include(${CMAKE_CURRENT_LIST_DIR}/src/report/sources.cmake)
+include(${CMAKE_CURRENT_LIST_DIR}/src/commands/sources.cmake)
 target_include_directories(placedb_cli PUBLIC ${CMAKE_CURRENT_LIST_DIR}/src)
 # The vocab command uses an engine internal (the vocabulary file); the demo renders synthetic
 # sequences.
@@ -74,7 +53,7 @@ else()
   message(STATUS "ROS 1 bags: not read (install librosbag-storage-dev and its headers)")
 endif()
 
-add_executable(placedb ${CMAKE_CURRENT_LIST_DIR}/src/main.cpp)
+add_executable(placedb ${CMAKE_CURRENT_LIST_DIR}/src/commands/main.cpp)
 # main() checks PLACEDB_SIMD (an engine internal) before any command writes a file.
 target_link_libraries(placedb PRIVATE placedb_cli placedb_engine_internal placedb_build_flags
                       placedb_version)

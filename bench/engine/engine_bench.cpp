@@ -16,9 +16,9 @@
 #include <vector>
 
 #include "features/image_conversion.h"
-#include "image_source.h"  // the CLI's list-file reader: same rules as `placedb map`
 #include "placedb/map.h"
 #include "placedb/storage/map_files.h"
+#include "sources/image_source.h"  // the CLI's list-file reader: same rules as `placedb map`
 
 namespace fs = std::filesystem;
 using placedb::FrameResult;

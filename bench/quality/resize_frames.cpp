@@ -19,7 +19,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "image_source.h"  // the CLI's list-file reader: same rules as `placedb map`
+#include "sources/image_source.h"  // the CLI's list-file reader: same rules as `placedb map`
 
 namespace {
 

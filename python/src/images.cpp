@@ -4,8 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "image_source.h"
 #include "placedb/error.h"
+#include "sources/image_source.h"
 
 namespace py = pybind11;
 

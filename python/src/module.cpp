@@ -15,17 +15,17 @@
 #include <string>
 #include <vector>
 
+#include "commands/map_summary.h"
+#include "commands/vocab_transfer.h"
 #include "errors.h"
 #include "frame_names.h"
-#include "image_source.h"
 #include "images.h"
 #include "map_rows.h"
-#include "map_summary.h"
 #include "placedb/error.h"
 #include "placedb/map.h"
 #include "placedb/options.h"
 #include "placedb/version.h"
-#include "vocab_transfer.h"
+#include "sources/image_source.h"
 
 namespace py = pybind11;
 

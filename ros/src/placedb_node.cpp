@@ -19,9 +19,9 @@
 #include <string>
 #include <thread>
 
+#include "commands/mapping_run.h"
 #include "exit_codes.h"
 #include "interrupt.h"
-#include "mapping_run.h"
 #include "placedb/error.h"
 #include "placedb/version.h"
 #include "query_service.h"

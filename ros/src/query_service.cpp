@@ -2,7 +2,7 @@
 
 #include <fmt/format.h>
 
-#include "map_summary.h"
+#include "commands/map_summary.h"
 #include "placedb/storage/map_store.h"
 #include "ros_messages.h"
 

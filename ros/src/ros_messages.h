@@ -11,8 +11,8 @@
 #include <sensor_msgs/CompressedImage.h>
 #include <sensor_msgs/Image.h>
 
-#include "image_message.h"
 #include "placedb/map.h"
+#include "sources/image_message.h"
 
 namespace placedb::ros_node {
 

@@ -1,8 +1,9 @@
 #pragma once
-// A ROS image topic as the mapping loop's source (tools/src/mapping_run.h). The subscriber's
-// callback hands each message, still serialized, to a FrameMailbox and returns at once; the
-// mapping loop takes frames from it and decodes them as a bag's (tools/src/image_message.h), so
-// a topic and a bag of the same messages give the same pixels and the same decisions.
+// A ROS image topic as the mapping loop's source (tools/src/commands/mapping_run.h). The
+// subscriber's callback hands each message, still serialized, to a FrameMailbox and returns at
+// once; the mapping loop takes frames from it and decodes them as a bag's
+// (tools/src/sources/image_message.h), so a topic and a bag of the same messages give the same
+// pixels and the same decisions.
 //
 // A robot's camera does not wait for the engine: with `drop` on, the mailbox keeps only the
 // newest frame and counts every one it replaces, as a live camera source does. With it off,
@@ -17,8 +18,8 @@
 #include <string>
 #include <vector>
 
-#include "image_message.h"
-#include "image_source.h"
+#include "sources/image_message.h"
+#include "sources/image_source.h"
 
 namespace placedb::ros_node {
 

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cstring>
 
-#include "pg_map_store.h"
+#include "backends.h"
 #include "placedb/storage/migrations.h"
 #include "placedb/storage/sqlite_map_store.h"
 

@@ -18,8 +18,6 @@
 
 namespace placedb::storage::detail {
 
-class Database;
-
 // engine_state key (owned by storage) holding the row count of kd_nodes, as decimal text.
 inline constexpr const char* kKdNodeRowsKey = "storage.kd_nodes.rows";
 
@@ -41,14 +39,6 @@ std::uint32_t kdNodeChecksum(std::int64_t tree, std::int64_t node, std::int64_t 
 std::string locationWordDescriptorsFault(std::int64_t location_id, std::int64_t dim,
                                          const std::uint8_t* words, std::size_t size,
                                          LocationWordDescriptors* out = nullptr);
-
-// True when column `column` of the current row holds `computed` (a NULL never matches: every row
-// of a schema-8 map has its sum).
-bool checksumMatches(const class Statement& row, int column, std::uint32_t computed);
-
-// Fills the checksum of every row of an upgraded map and writes kKdNodeRowsKey; runs inside the
-// schema-8 migration's transaction.
-void fillChecksums(Database& db);
 
 // "map P damaged: TABLE row ROW fails its checksum (...)": one wording for every reader.
 [[noreturn]] void refuseDamagedRow(const std::string& path, const std::string& table,

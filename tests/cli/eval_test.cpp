@@ -7,11 +7,11 @@
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 
-#include "eval.h"
 #include "frame_log.h"
-#include "loop_matrix.h"
 #include "placedb/error.h"
-#include "run_series.h"
+#include "report/eval.h"
+#include "report/loop_matrix.h"
+#include "report/run_series.h"
 #include "subprocess.h"
 #include "test_paths.h"
 

@@ -1,6 +1,6 @@
 // `placedb export`: a closure that stores a relative pose is exported with it, turned into g2o's
 // measurement of the edge a -> b; one without is flagged appearance-only in every format.
-#include "graph_export.h"
+#include "report/graph_export.h"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>

@@ -1,8 +1,8 @@
 // The parts of `placedb report` that need no map: base64, HTML escaping, the closures shown.
 #include <gtest/gtest.h>
 
-#include "base64.h"
-#include "report.h"
+#include "report/base64.h"
+#include "report/report.h"
 
 namespace placedb::cli {
 namespace {

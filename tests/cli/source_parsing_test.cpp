@@ -7,8 +7,8 @@
 #include <random>
 
 #include "file_bytes.h"
-#include "image_source.h"
 #include "placedb/error.h"
+#include "sources/image_source.h"
 #include "test_paths.h"
 
 namespace placedb::cli {

@@ -371,7 +371,7 @@ TEST_F(BadMaps, ZeroedPagesAreRefusedAtOpenOrWhenReadWithATypedError) {
 }
 
 // Fails today: SQLite errors met after opening ("database disk image is malformed ... in
-// statement: SELECT ...") do not say which file. Proposed fix (storage/src/database.cpp,
+// statement: SELECT ...") do not say which file. Proposed fix (storage/src/sqlite/database.cpp,
 // detail::throwSqlite): append sqlite3_db_filename(db, "main") to the message.
 TEST_F(BadMaps, ErrorsFromDamagedPagesNameTheMapFile) {
   const auto outcomes = zeroEachPage(dir_, good_);

@@ -91,10 +91,11 @@ TEST(Migrations, AllMigrationsEqualSchemaSql) {
   EXPECT_EQ(normalisedSchema(migrated), expected);
 }
 
-// A frame's rows are written parent last (storage/src/sqlite_map_store.cpp, MapImpl::commit), so
-// each deferred foreign key is violated until its parent's insert, and at that insert SQLite looks
-// up the child rows naming the new parent. Without an index on the child column that look is a
-// scan of the whole child table, every frame: the map's cost would grow with its size.
+// A frame's rows are written parent last (storage/src/sqlite/sqlite_map_store.cpp,
+// MapImpl::commit), so each deferred foreign key is violated until its parent's insert, and at that
+// insert SQLite looks up the child rows naming the new parent. Without an index on the child column
+// that look is a scan of the whole child table, every frame: the map's cost would grow with its
+// size.
 TEST(Migrations, EveryDeferredForeignKeyLeadsAnIndex) {
   const auto dir = placedb::testing::scratchDir("EveryDeferredForeignKeyLeadsAnIndex");
   const std::string path = (dir / "map.db").string();

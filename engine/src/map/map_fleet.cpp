@@ -1,5 +1,5 @@
 // Fleet maps: several writers of one map on a PostgreSQL server at once, each in its own session
-// (schema/SCHEMA.md, "Fleet maps"; storage/src/pg_map_store_fleet.cpp keeps the rows).
+// (schema/SCHEMA.md, "Fleet maps"; storage/src/postgres/pg_map_store_fleet.cpp keeps the rows).
 //
 // - The main line. One writer at a time continues the memory in the map-wide tables, exactly as
 //   the writer of a file does: a lone writer on a server decides as on a file. A writer that

@@ -1,7 +1,7 @@
 #pragma once
 // MapStore: one placedb map opened for reading and writing or for inspection. The interface the
 // engine and the tools use; two backends implement it: a SQLite file (SqliteMapStore,
-// sqlite_map_store.h) and a PostgreSQL database named by a libpq URI (storage/src/pg_*.cpp).
+// sqlite_map_store.h) and a PostgreSQL database named by a libpq URI (storage/src/postgres/).
 // openMapStore() picks one from the map's name, so nothing above storage knows which it has.
 //
 // Opening read-write creates a missing map, refuses what is not a placedb map and maps newer

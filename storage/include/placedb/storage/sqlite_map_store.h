@@ -153,7 +153,7 @@ class SqliteMapStore final : public MapStore {
                  const std::function<void(const TableRow&)>& row) const override;
   void writeRows(const TableColumns& t, const std::vector<TableRow>& rows) override;
 
-  // Writers (map_store.h; a file has one: storage/src/sqlite_map_store_fleet.cpp).
+  // Writers (map_store.h; a file has one: storage/src/sqlite/sqlite_map_store_fleet.cpp).
   bool sharedByWriters() const override;
   bool claimMainLine() override;
   void releaseMainLine() override;
