@@ -6,6 +6,7 @@ pkg_check_modules(PLPLOT REQUIRED IMPORTED_TARGET plplot)
 add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/exit_codes.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/text_file.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/whole_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/interrupt.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/image_source.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/image_message.cpp

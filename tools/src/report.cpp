@@ -22,7 +22,7 @@
 #include "placedb/error.h"
 #include "placedb/storage/map_store.h"
 #include "report_page.h"
-#include "text_file.h"
+#include "whole_file.h"
 
 namespace placedb::cli {
 namespace fs = std::filesystem;
@@ -373,7 +373,7 @@ ReportSummary writeReport(const ReportRequest& request) {
     throw Error(ErrorCode::kIo,
                 fmt::format("cannot create {}: {}", request.out.string(), ec.message()));
   summary.page = request.out / "index.html";
-  writeTextFile(summary.page, reportHtml(page));
+  writeWholeFile(summary.page, reportHtml(page));
   summary.figures = page.plots.size();
   summary.wrong_shown = page.wrong.size();
   summary.right_shown = page.right.size();
