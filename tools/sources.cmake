@@ -17,6 +17,7 @@ add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/settings_input.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/calibration_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/frame_log.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/log_recovery.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/progress.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/eval.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/plots.cpp

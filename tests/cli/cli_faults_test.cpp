@@ -186,13 +186,18 @@ TEST(CliFaults, FullDiskUnderTheLogIsDiskFullWithWholeRows) {
   EXPECT_GT(rows, 0u);
   EXPECT_LT(rows, 40u);
 
-  // With room again the session resumes; the log keeps whole rows only.
+  // With room again the session resumes; the log keeps whole rows only, and gets back the row
+  // of the frame that filled the disk (the map has that frame): every frame once.
   ASSERT_TRUE(disk.resize("1m"));
   auto rest = placedb({"map", map, source, "--log", log, "-q"}, dir);
   ASSERT_EQ(rest.exit_code, 0) << describe(rest);
   expectWholeRows(log);
   storage::SqliteMapStore store(map, storage::OpenMode::kReadOnly);
   EXPECT_EQ(store.frameCount(), 40);
+  const cli::CsvTable table = cli::readCsv(log);
+  ASSERT_EQ(table.rows.size(), 40u);
+  for (std::size_t i = 0; i < table.rows.size(); ++i)
+    EXPECT_EQ(table.cell(i, table.column("frame")), std::to_string(i));
 }
 
 TEST(CliFaults, FullDiskUnderAVocabularyExportIsDiskFullWithNoFileLeft) {

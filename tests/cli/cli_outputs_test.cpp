@@ -5,6 +5,11 @@
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
 #include <fstream>
 #include <future>
 #include <thread>
@@ -110,18 +115,36 @@ TEST(CliOutputs, AFifoIsWrittenNotReplaced) {
   for (const std::string name : {"words.pvoc", "graph.g2o"}) {
     const fs::path fifo = run.dir / name;
     ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
-    auto reader = std::async(std::launch::async, [&fifo] { return bytesOf(fifo); });
+    // The reading end, open before the run (so that the run's open does not wait for one), read
+    // until the writer closes it or the run is over, whichever comes first.
+    const int fd = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
+    ASSERT_GE(fd, 0);
+    std::atomic<bool> finished{false};
+    auto reader = std::async(std::launch::async, [fd, &finished] {
+      std::string got;
+      char buffer[65536];
+      for (;;) {
+        const ssize_t n = ::read(fd, buffer, sizeof buffer);
+        if (n > 0) {
+          got.append(buffer, static_cast<std::size_t>(n));
+        } else if ((n == 0 && !got.empty()) || finished) {
+          break;  // the writer closed its end, or there never was one
+        } else {
+          std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        }
+      }
+      return got;
+    });
     const bool vocabulary = name == "words.pvoc";
     const auto r = placedb(
         vocabulary ? std::vector<std::string>{"vocab", "export", run.map.string(), fifo.string()}
                    : std::vector<std::string>{"export", run.map.string(), fifo.string(), "--format",
                                               "g2o"},
         run.dir);
-    EXPECT_EQ(r.exit_code, 0) << describe(r);
-    if (r.exit_code != 0) {  // let the reader go
-      std::ofstream(fifo) << "";
-    }
+    finished = true;
     const std::string read = reader.get();
+    ::close(fd);
+    EXPECT_EQ(r.exit_code, 0) << describe(r);
     struct stat st {};
     ASSERT_EQ(::lstat(fifo.c_str(), &st), 0);
     EXPECT_TRUE(S_ISFIFO(st.st_mode)) << name << " was replaced";
