@@ -14,6 +14,7 @@ add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/ros1_bag.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/ros2_bag.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/live_source.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/mjpeg_stream.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/settings_input.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/calibration_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/frame_log.cpp

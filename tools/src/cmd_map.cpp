@@ -4,6 +4,8 @@
 #include <memory>
 
 #include "commands.h"
+#include "exit_codes.h"
+#include "interrupt.h"
 #include "live_source.h"
 #include "map_argument.h"
 #include "mapping_run.h"
@@ -122,11 +124,16 @@ Command addMapCommand(CLI::App& parent) {
             if (app->count("--stop-after")) request->stop_after = *stop_after;
             const bool live = isLiveSource(request->source);
             MappingSummary s = runMapping(*request);
+            if (!s.stalled.empty())
+              printWarning(fmt::format("{}: the session is closed, every frame kept (exit {})",
+                                       s.stalled, kExitSourceStalled));
             if (!request->quiet) {
-              std::string why = s.interrupted     ? (live ? "interrupted; the session is closed"
-                                                          : "interrupted; run again to resume")
+              const std::string stopped = fmt::format("stopped by {}", interruptSignalName());
+              std::string why = s.interrupted     ? (live ? stopped + "; the session is closed"
+                                                          : stopped + "; run again to resume")
                                 : s.stopped_early ? "stopped by --stop-after; run again to resume"
-                                                  : "end of source";
+                                : !s.stalled.empty() ? "stalled: the stream sent nothing"
+                                                     : "end of source";
               std::fputs(fmt::format("placedb: session {}: {} frames ({} bad, {} of them "
                                      "unreadable{}) in {:.1f} s, {} new locations, accepted loop "
                                      "closures {} ({})\n",
@@ -136,7 +143,7 @@ Command addMapCommand(CLI::App& parent) {
                              .c_str(),
                          stderr);
             }
-            return 0;
+            return s.stalled.empty() ? kExitOk : kExitSourceStalled;
           }};
 }
 

@@ -321,7 +321,10 @@ MappingSummary runOnce(const MappingRequest& request, std::chrono::steady_clock:
       break;
     }
     if (!source->read(frame)) {
-      summary.reached_end = true;
+      // A live source's wait for its next frame ends on Ctrl-C too: that is a stop, not its end.
+      summary.interrupted = interruptRequested();
+      summary.stalled = summary.interrupted ? std::string() : source->endProblem();
+      summary.reached_end = !summary.interrupted && summary.stalled.empty();
       break;
     }
     FrameResult result;
