@@ -268,6 +268,16 @@ CheckReport checkMap(const std::string& given_path, const CheckOptions& options)
       db->exec("COMMIT");
       return report;
     }
+    // Tables of another schema than the version says: `map` refuses them (an upgrade would fail
+    // halfway), and the row checks below would read columns that are not there.
+    for (const auto& mismatch : detail::schemaMismatches(*db, report.schema_version))
+      checker.find(
+          "schema", "",
+          mismatch + " (the map says schema " + std::to_string(report.schema_version) + ")");
+    if (!report.ok()) {
+      db->exec("COMMIT");
+      return report;
+    }
     checker.foreignKeys();
     if (report.checksums) checker.checksums();
     if (report.schema_version >= kFleetSchemaVersion) checker.sideSessions();

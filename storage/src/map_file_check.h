@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "database.h"
 
@@ -42,9 +43,16 @@ std::unique_ptr<Database> openForInspection(const std::string& path);
 // Reads the identity without creating any file next to the map.
 MapIdentity inspectIdentity(const std::string& path);
 
-// Throws kMapRefused naming the first table or index of the current schema that the map lacks
-// (the map was edited by hand or damaged); the engine could not run without it.
-void checkSchemaObjects(Database& db, const std::string& path);
+// How the map's tables, indexes and columns differ from those of schema `version`: one line per
+// difference ("index locations_by_tier is missing", "column locations.x is there, which schema
+// 13 does not have"). A map's own extra tables and indexes are not differences, unless a later
+// schema has them. Empty when the map is that schema's.
+std::vector<std::string> schemaMismatches(Database& db, int version);
+
+// Throws kMapRefused naming the first difference of schemaMismatches() (the map was edited by
+// hand or damaged, or its user_version changed: the engine could not run on it, and an upgrade
+// would fail in the middle).
+void checkSchemaObjects(Database& db, const std::string& path, int version);
 
 // PRAGMA quick_check: reads every page of the file (b-tree structure, record formats, index
 // order and counts; not UNIQUE/foreign-key contents), so its cost grows with the file. Throws

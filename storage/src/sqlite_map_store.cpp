@@ -112,7 +112,7 @@ SqliteMapStore::SqliteMapStore(const std::string& given_path, OpenMode mode,
     }
     db_ = detail::openReadOnly(path);
     sqlite3_busy_timeout(db_->handle(), options.busy_timeout_ms);
-    detail::checkSchemaObjects(*db_, path);
+    detail::checkSchemaObjects(*db_, path, current);
     return;
   }
 
@@ -122,14 +122,18 @@ SqliteMapStore::SqliteMapStore(const std::string& given_path, OpenMode mode,
     // identity here, every page below (a write can spread damage that no read of this session
     // would have met).
     auto reader = detail::openForInspection(path);
-    const auto verdict = detail::judgeIdentity(detail::readIdentity(*reader, path), path, current);
+    const detail::MapIdentity identity = detail::readIdentity(*reader, path);
+    const auto verdict = detail::judgeIdentity(identity, path, current);
     std::error_code size_error;
     const auto bytes = std::filesystem::file_size(path, size_error);
     const bool small_enough =
         options.integrity_check_max_bytes <= 0 ||
         (!size_error && std::int64_t(bytes) <= options.integrity_check_max_bytes);
     check_pages = verdict != detail::Verdict::kBlankSqlite && small_enough;
-    if (verdict == detail::Verdict::kUpToDate) detail::checkSchemaObjects(*reader, path);
+    // An older map's tables must be its version's too: an upgrade of other tables would fail
+    // halfway (a user_version changed by hand).
+    if (verdict != detail::Verdict::kBlankSqlite)
+      detail::checkSchemaObjects(*reader, path, identity.user_version);
   }
   lock_fd_ = acquireWriterLock(path);
   try {
@@ -152,7 +156,7 @@ SqliteMapStore::SqliteMapStore(const std::string& given_path, OpenMode mode,
     // 32 MB of page cache: the word index is updated at random places every frame.
     db_->exec("PRAGMA cache_size = -32768");
     if (schemaVersion() < current) detail::applyMigrations(*db_, current);
-    detail::checkSchemaObjects(*db_, path);
+    detail::checkSchemaObjects(*db_, path, current);
     db_->exec("PRAGMA foreign_keys = ON");
     checkpointer_ = std::make_unique<detail::WalCheckpointer>(db_->handle(), path);
   } catch (...) {

@@ -154,6 +154,17 @@ TEST(CliFaults, SchemaVersionBelowTheTablesIsOneLineRefusal) {
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_EQ(r.err.find("in statement"), std::string::npos) << r.err;
   EXPECT_TRUE(bytesOf(map) == before);
+  // `check` reports what `map` refuses (it said "sound"), and `query` refuses it too.
+  auto check = placedb({"check", map.string(), "-q"}, dir);
+  expectCleanError(check, 4, "schema");
+  EXPECT_NE(check.out.find("the map says schema " +
+                           std::to_string(storage::currentSchemaVersion() - 1)),
+            std::string::npos)
+      << check.out;
+  expectCleanError(
+      placedb({"query", map.string(), (seq / "images" / "000001.png").string()}, dir), 4,
+      map.string());
+  EXPECT_TRUE(bytesOf(map) == before);
 }
 
 TEST(CliFaults, MissingTablesAreRefusedNotStorageFailures) {

@@ -16,6 +16,7 @@
 #include "placedb/options.h"
 #include "placedb/storage/map_check.h"
 #include "placedb/storage/map_store.h"
+#include "placedb/storage/migrations.h"
 
 namespace placedb::cli {
 namespace {
@@ -50,6 +51,11 @@ nlohmann::json toJson(const std::string& path, const storage::CheckReport& repor
 
 std::string describe(const std::string& path, const storage::CheckReport& report) {
   std::string text = fmt::format("map {} (schema {})\n", path, report.schema_version);
+  if (report.schema_version < storage::currentSchemaVersion())
+    text += fmt::format(
+        "  schema {} is older than this binary's {}: `map` upgrades it when it first opens it; "
+        "`query`, `info` and the engine's own checks wait until then\n",
+        report.schema_version, storage::currentSchemaVersion());
   text += fmt::format("  pages, indexes and constraints: {}\n",
                       storage::isServerMap(path)
                           ? "the server's (constraints always enforced; pages: data checksums "
