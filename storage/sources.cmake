@@ -38,6 +38,7 @@ target_sources(placedb_storage PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/map_copy.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/records.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/row_checksums.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/location_rows.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/wal_checkpointer.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/pg_connection.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/pg_map_check.cpp

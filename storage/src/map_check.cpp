@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "database.h"
+#include "location_rows.h"
 #include "map_file_check.h"
 #include "placedb/storage/map_files.h"
 #include "placedb/storage/map_store.h"
@@ -105,7 +106,8 @@ class Checker {
                float value;
                std::memcpy(&value, data + at, sizeof value);
                if (!std::isfinite(value))
-                 return find("words", std::to_string(id), "holds a value that is not finite");
+                 return find("words", std::to_string(id),
+                             "holds a value that is not a finite number");
              }
            }
          });
@@ -191,6 +193,28 @@ class Checker {
              "holds " + std::to_string(counted[session]) + " rows where the map recorded " + text);
   }
 
+  // What every location's rows must hold (schema 15): the rows its held bits name and no others,
+  // its references against their digest, a valid tier; and the sums of the posterior's rows.
+  void locationRows() {
+    progress("locations", 0, 0);
+    const auto sink = [this](CheckFinding f) {
+      find(std::move(f.table), std::move(f.row), std::move(f.problem));
+    };
+    detail::checkSessionRows(db_, sink);
+    detail::checkLocationRows(db_, sink);
+    progress("word_refs", 0, 0);
+    detail::checkLocationRefs(db_, sink);
+    detail::checkLinkCounts(db_, sink);
+    progress("frames", 0, 0);
+    detail::checkFrameRows(db_, sink);
+    rows("filter_posterior", "SELECT location_id, probability, checksum FROM filter_posterior",
+         [&](const Statement& s) {
+           if (!detail::checksumMatches(
+                   s, 2, detail::posteriorChecksum(s.columnInt(0), s.columnDouble(1))))
+             find("filter_posterior", std::to_string(s.columnInt(0)), "fails its checksum");
+         });
+  }
+
   // Values the engine refuses when it loads them, found here without loading the engine.
   void values() {
     progress("values", 0, 0);
@@ -239,6 +263,24 @@ std::unique_ptr<Database> openCheckConnection(const std::string& path, bool* wri
 
 }  // namespace
 
+namespace detail {
+
+void checkRowSums(Database& db, const std::string& path) {
+  CheckOptions options;
+  options.max_findings = 1;
+  CheckReport report;
+  Checker checker(db, options, report);
+  checker.checksums();
+  checker.sideSessions();
+  checker.locationWordDescriptors();
+  if (!report.findings.empty()) {
+    const CheckFinding& f = report.findings.front();
+    refuseDamagedRow(path, f.table, f.row, f.problem);
+  }
+}
+
+}  // namespace detail
+
 CheckReport checkMap(const std::string& given_path, const CheckOptions& options) {
   if (isServerMap(given_path)) return checkPgMap(given_path, options);
   const std::string path = detail::resolveMapPath(given_path);
@@ -282,6 +324,7 @@ CheckReport checkMap(const std::string& given_path, const CheckOptions& options)
     if (report.checksums) checker.checksums();
     if (report.schema_version >= kFleetSchemaVersion) checker.sideSessions();
     if (report.schema_version >= kLocationWordsSchemaVersion) checker.locationWordDescriptors();
+    if (report.schema_version >= detail::kLocationRowsSchemaVersion) checker.locationRows();
     checker.values();
     if (report.ok() && options.last_check && report.schema_version == currentSchemaVersion()) {
       if (options.progress) options.progress({"engine state", 0, 0});

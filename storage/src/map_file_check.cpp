@@ -264,6 +264,22 @@ void checkIntegrity(Database& db, const std::string& path) {
   if (finding != "ok") refuse(path, "damaged (SQLite's quick_check: " + finding + ")");
 }
 
+void checkForeignKeys(Database& db, const std::string& path) {
+  try {
+    Statement check(db.handle(), "PRAGMA foreign_key_check");
+    if (check.step())
+      refuse(path,
+             "damaged: " + check.columnText(0) +
+                 (check.isNull(1) ? std::string() : " row " + std::to_string(check.columnInt(1))) +
+                 " refers to a missing row of " + check.columnText(2) +
+                 " (placedb check lists every such row)");
+  } catch (const StorageError& error) {
+    if (error.code() == ErrorCode::kMapRefused && error.sqliteCode() != 0)
+      refuse(path, "damaged: " + error.sqliteMessage());
+    throw;
+  }
+}
+
 MapIdentity readIdentity(Database& db, const std::string& path) {
   MapIdentity identity;
   try {

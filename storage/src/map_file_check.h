@@ -59,6 +59,17 @@ void checkSchemaObjects(Database& db, const std::string& path, int version);
 // kMapRefused with SQLite's first finding when the file is malformed.
 void checkIntegrity(Database& db, const std::string& path);
 
+// PRAGMA foreign_key_check: a row naming one that is not there (a locations or frames row
+// deleted with foreign keys off). Throws kMapRefused naming the first such row. It looks every
+// reference up, so it costs about a page check's time; it runs with it.
+void checkForeignKeys(Database& db, const std::string& path);
+
+// Every row sum (schema 8) and stored count, as placedb check verifies them: what the page check
+// adds on a map small enough for it, so that a row damaged in long-term memory is refused at
+// open, not when a later frame reads it. Throws kMapRefused naming the first damaged row.
+// (map_check.cpp)
+void checkRowSums(Database& db, const std::string& path);
+
 // What to do with a file whose identity is known.
 enum class Verdict { kUpToDate, kNeedsMigration, kBlankSqlite };
 // Throws kMapRefused with the reason when the file is not a placedb map this binary can open.

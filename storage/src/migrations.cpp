@@ -1,5 +1,6 @@
 #include <filesystem>
 
+#include "location_rows.h"
 #include "migrations_apply.h"
 #include "placedb/storage/migrations.h"
 #include "row_checksums.h"
@@ -29,6 +30,7 @@ void applyMigrations(Database& db, int target_version) {
         try {
           db.exec(migration.sql);
           if (migration.version == kChecksumSchemaVersion) fillChecksums(db);
+          if (migration.version == kLocationRowsSchemaVersion) fillLocationRows(db);
         } catch (const StorageError& error) {
           if (error.code() == ErrorCode::kDiskFull || error.code() == ErrorCode::kMapBusy ||
               error.code() == ErrorCode::kIo)
