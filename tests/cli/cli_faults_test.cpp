@@ -141,6 +141,56 @@ TEST(CliFaults, DamagedEngineValuesAreRefusedBeforeAnyWrite) {
   }
 }
 
+// What check reports, map and query refuse (exit 4, naming table and row) and leave the file
+// byte-identical; before, map wrote on a map check called damaged, query answered on a tier of 7,
+// and counters behind the rows (their sum forged) passed check and failed map after it wrote.
+TEST(CliFaults, WhatCheckReportsMapAndQueryRefuseBeforeAnyWrite) {
+  auto seq = smallSequence(12);
+  auto dir = scratchDir("CliFaults_check_agrees");
+  auto good = mappedCopy(seq, dir, "good.placedb", {"--stop-after", "8"});
+  const auto forgeCounter = [](const fs::path& map) {
+    storage::SqliteMapStore store(map.string(), storage::OpenMode::kReadWrite);
+    auto counters = nlohmann::json::parse(*store.getStateText("engine.counters"));
+    counters["next_frame_id"] = 3;  // below the frames there are, its sum written as placedb does
+    store.putState("engine.counters", counters.dump());
+  };
+  const std::vector<std::pair<std::function<void(const fs::path&)>, std::string>> damage = {
+      {[](const fs::path& map) {
+         sqlExec(map, "DELETE FROM locations WHERE id = (SELECT max(id) FROM locations)");
+       },
+       "refers to a missing row of locations"},
+      {[](const fs::path& map) { sqlExec(map, "DELETE FROM frames WHERE id = 4"); },
+       "refers to a missing row of frames"},
+      {[](const fs::path& map) {
+         sqlExec(map,
+                 "PRAGMA ignore_check_constraints = 1; UPDATE locations SET tier = 7 "
+                 "WHERE id = (SELECT min(id) FROM locations)");
+       },
+       "locations"},
+      {forgeCounter, "next_frame_id"},
+      {[](const fs::path& map) {
+         sqlExec(map,
+                 "DELETE FROM engine_state WHERE key = 'keypoint_descriptors/' || "
+                 "(SELECT min(id) FROM locations)");
+       },
+       "keypoint_descriptors"},
+  };
+  int n = 0;
+  for (const auto& [apply, names] : damage) {
+    auto map = dir / ("d" + std::to_string(n++) + ".placedb");
+    fs::copy_file(good, map, fs::copy_options::overwrite_existing);
+    apply(map);
+    const std::string before = bytesOf(map);
+    expectCleanError(placedb({"check", map.string(), "-q"}, dir), 4, map.string());
+    auto mapped = placedb({"map", map.string(), (seq / "frames.txt").string(), "-q"}, dir);
+    expectCleanError(mapped, 4, names);
+    expectCleanError(
+        placedb({"query", map.string(), (seq / "images" / "000001.png").string()}, dir), 4,
+        map.string());
+    EXPECT_TRUE(bytesOf(map) == before) << names;
+  }
+}
+
 // A schema version one below the tables' (a damaged user_version): the upgrade fails on the
 // first change the tables already have. One line naming the map, exit 4, the map unchanged.
 TEST(CliFaults, SchemaVersionBelowTheTablesIsOneLineRefusal) {
