@@ -174,12 +174,13 @@ void checkLocationRefs(Database& db, const FindingSink& found) {
     found({"word_refs",
            "(" + std::to_string(refs.columnInt(0)) + ", " + std::to_string(refs.columnInt(1)) + ")",
            "belongs to no location (its locations row is missing)"});
-  Statement keypoints(db.handle(),
-                      "SELECT key FROM engine_state WHERE key >= '" + keypointsKeyPrefix() +
-                          "' AND key < '" +
-                          keypointsKeyPrefix().substr(0, keypointsKeyPrefix().size() - 1) +
-                          "0' AND NOT EXISTS (SELECT 1 FROM locations l WHERE '" +
-                          keypointsKeyPrefix() + "' || l.id = key)");
+  // The id is read from the key: a key compared with every location's would cost their product.
+  const std::string prefix = keypointsKeyPrefix();
+  Statement keypoints(db.handle(), "SELECT key FROM engine_state WHERE key >= '" + prefix +
+                                       "' AND key < '" + prefix.substr(0, prefix.size() - 1) +
+                                       "0' AND NOT EXISTS (SELECT 1 FROM locations l WHERE l.id = "
+                                       "CAST(substr(key, " +
+                                       std::to_string(prefix.size() + 1) + ") AS INTEGER))");
   while (keypoints.step())
     found({"engine_state", "'" + keypoints.columnText(0) + "'",
            "belongs to no location (its locations row is missing)"});

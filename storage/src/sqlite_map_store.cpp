@@ -119,8 +119,11 @@ SqliteMapStore::SqliteMapStore(const std::string& given_path, OpenMode mode,
       std::error_code size_error;
       const auto bytes = std::filesystem::file_size(path, size_error);
       if (options.integrity_check_max_bytes <= 0 ||
-          (!size_error && std::int64_t(bytes) <= options.integrity_check_max_bytes))
+          (!size_error && std::int64_t(bytes) <= options.integrity_check_max_bytes)) {
+        db_->queryInt("PRAGMA mmap_size = " + std::to_string(options.integrity_check_max_bytes));
         checkRowsAgree(path);
+        db_->queryInt("PRAGMA mmap_size = 0");
+      }
     }
     return;
   }
@@ -155,8 +158,11 @@ SqliteMapStore::SqliteMapStore(const std::string& given_path, OpenMode mode,
     // On this connection, before its first write: SQLite verifies CHECK constraints in
     // quick_check only on a connection that could write (a tier of 7 passes a read-only one).
     if (check_pages) {
+      // Read through a memory map while every page is read: half the time of read() copies.
+      db_->queryInt("PRAGMA mmap_size = " + std::to_string(options.integrity_check_max_bytes));
       detail::checkIntegrity(*db_, path);
       checkRowsAgree(path);
+      db_->queryInt("PRAGMA mmap_size = 0");
     }
     if (options.max_page_count > 0) {
       db_->queryInt("PRAGMA max_page_count = " + std::to_string(options.max_page_count));
