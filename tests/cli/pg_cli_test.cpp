@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -23,26 +24,39 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// SCHEMA.md's grants of a robot that maps (section "Roles"), on the map `uri` in database `db`.
+// SCHEMA.md's grants of a robot that maps, run as the section "Roles" gives them (its first sql
+// block, the CREATE ROLE left out) for `role` on the map `uri` in database `db`: the tests prove
+// the grants the document gives, not a copy of them.
 void grantRobot(const std::string& uri, const std::string& db, const std::string& role) {
-  pgAdmin(uri, "GRANT CONNECT ON DATABASE " + db + " TO " + role);
-  pgAdmin(uri, "GRANT USAGE ON SCHEMA public TO " + role);
-  pgAdmin(uri, "GRANT SELECT ON ALL TABLES IN SCHEMA public TO " + role);
-  pgAdmin(uri,
-          "GRANT INSERT ON sessions, settings, frames, locations, location_frames, words, "
-          "word_refs, links, hypotheses, place_codes, location_word_descriptors, engine_state, "
-          "kd_nodes, filter_posterior, wm_entries, id_blocks, session_state, session_kd_nodes, "
-          "session_posterior, session_memory TO " +
-              role);
-  pgAdmin(uri,
-          "GRANT UPDATE ON sessions, locations, links, place_codes, location_word_descriptors, "
-          "engine_state, kd_nodes, filter_posterior, wm_entries, id_blocks, session_state, "
-          "session_kd_nodes, session_posterior, session_memory TO " +
-              role);
-  pgAdmin(uri,
-          "GRANT DELETE ON kd_nodes, filter_posterior, session_state, session_kd_nodes, "
-          "session_posterior, session_memory TO " +
-              role);
+  std::ifstream in(PLACEDB_SCHEMA_DOC);
+  ASSERT_TRUE(in) << PLACEDB_SCHEMA_DOC;
+  const std::string doc((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto section = doc.find("\n### Roles\n");
+  ASSERT_NE(section, std::string::npos) << "SCHEMA.md has no section Roles";
+  const auto open = doc.find("```sql\n", section);
+  ASSERT_NE(open, std::string::npos) << "SCHEMA.md's Roles gives no sql block";
+  const auto close = doc.find("```", open + 7);
+  std::istringstream lines(doc.substr(open + 7, close - open - 7));
+  std::string sql, line;
+  while (std::getline(lines, line))
+    if (line.rfind("--", 0) != 0) sql += line + "\n";
+  int grants = 0;
+  for (std::size_t at = 0, end; (end = sql.find(';', at)) != std::string::npos; at = end + 1) {
+    std::string statement = sql.substr(at, end - at);
+    statement.erase(0, statement.find_first_not_of(" \n"));
+    if (statement.rfind("CREATE ROLE", 0) == 0) continue;
+    ASSERT_EQ(statement.rfind("GRANT ", 0), 0u) << statement;
+    const auto replace = [&statement](const std::string& from, const std::string& to) {
+      const auto found = statement.find(from);
+      if (found != std::string::npos) statement.replace(found, from.size(), to);
+    };
+    replace(" DATABASE fleet ", " DATABASE " + db + " ");
+    ASSERT_NE(statement.find(" TO robot"), std::string::npos) << statement;
+    replace(" TO robot", " TO " + role);
+    pgAdmin(uri, statement);
+    ++grants;
+  }
+  EXPECT_EQ(grants, 6) << "SCHEMA.md's Roles changed: check the tests that use its grants";
 }
 
 // frames [first, first + count) of lip6_outdoor as a list of absolute paths, or "" when absent.
@@ -271,7 +285,7 @@ TEST_F(PgCli, LeastPrivilegeRobotMapsAndQueriesWithAPasswordFile) {
   pgAdmin(server_, "DROP ROLE IF EXISTS cli_fleet_robot");
   pgAdmin(server_, "CREATE ROLE cli_fleet_robot LOGIN PASSWORD 'pass-file-secret'");
   // The grants as SCHEMA.md gives them.
-  grantRobot(uri, db, "cli_fleet_robot");
+  ASSERT_NO_FATAL_FAILURE(grantRobot(uri, db, "cli_fleet_robot"));
 
   const std::string host = uri.substr(uri.find("host="), uri.find('&') - uri.find("host="));
   const fs::path pass_file = dir_ / "pgpass";
@@ -346,7 +360,7 @@ TEST_F(PgCli, RobotsCannotTouchOtherRobotsPlacesNorLockTheFleetOut) {
   for (const std::string role : {"cli_robot_a", "cli_robot_b"}) {
     pgAdmin(server_, "DROP ROLE IF EXISTS " + role);
     pgAdmin(server_, "CREATE ROLE " + role + " LOGIN PASSWORD 'robot-secret'");
-    grantRobot(uri, db, role);
+    ASSERT_NO_FATAL_FAILURE(grantRobot(uri, db, role));
     robot_uri[role] = "postgresql://" + role + ":robot-secret@/" + db + "?" + host;
   }
   auto a = placedb({"map", robot_uri["cli_robot_a"], list_a, "-q"}, dir_);
