@@ -19,8 +19,9 @@ ALTER TABLE sessions ADD COLUMN settings_digest bigint;
 -- rows of another role's session (its frames, places, references, links between two such
 -- places, settings, its own memory); the main line's memory (kd_nodes, filter_posterior,
 -- wm_entries, engine_state but keypoint rows, locations' tiers) unless the writer holds the main
--- line's lock; and deletes and updates no writer of a map makes. What only the owner writes is
--- refused before the statement runs (so before any foreign key's own error); the rest is judged
+-- line's lock; and deletes and updates no writer of a map makes. What only the owner writes, and
+-- the main line's memory, are judged before the statement runs (so before any foreign key's own
+-- error, and with no copy of the rows: the main line's writes are most of a frame's); the rest
 -- once a statement, after it, on the rows it wrote (transition tables): the owner's writers pay
 -- a call each. Cascades (ON DELETE CASCADE) run as the tables' owner and pass.
 ALTER TABLE sessions ADD COLUMN owner_role name NOT NULL DEFAULT current_user;
@@ -50,7 +51,18 @@ BEGIN
   RETURN NULL;
 END $$;
 
--- TG_ARGV[0] says whose a row is: 'main_line' (the main line's memory: its holder's), 'sessions'
+-- Before a statement on the main line's memory: its writer holds the main line.
+CREATE FUNCTION placedb_main_line_only() RETURNS trigger LANGUAGE plpgsql
+SET search_path FROM CURRENT AS $$
+BEGIN
+  IF placedb_confined() AND NOT placedb_holds_main_line() THEN
+    RAISE EXCEPTION 'role % may not % %: it is the main line''s memory, and this writer does not '
+      'hold the main line', current_user, lower(TG_OP), TG_TABLE_NAME USING ERRCODE = '42501';
+  END IF;
+  RETURN NULL;
+END $$;
+
+-- TG_ARGV[0] says whose a row is: 'sessions'
 -- (a sessions row: the role it names), 'session:COL' (the session COL names), 'side:COL' (a
 -- session's own memory: its role, or the main line's holder keeping a killed writer's memory),
 -- 'location:COL' (the location COL names), 'links' (either end), 'state' (engine_state: a
@@ -75,7 +87,6 @@ BEGIN
                                        ELSE ARRAY['old_rows', 'new_rows'] END LOOP
     EXECUTE format('SELECT r::text FROM %I r WHERE NOT (%s) LIMIT 1', relation,
       CASE how
-        WHEN 'main_line' THEN 'placedb_holds_main_line()'
         WHEN 'sessions' THEN 'r.owner_role = current_user'
         WHEN 'session' THEN format(own_session, 'r.' || quote_ident(col))
         WHEN 'side' THEN format(own_session, 'r.' || quote_ident(col)) ||
@@ -90,11 +101,8 @@ BEGIN
       END)
       INTO foreign_row;
     IF foreign_row IS NOT NULL THEN
-      RAISE EXCEPTION 'role % may not % % row %: %', current_user, lower(TG_OP), TG_TABLE_NAME,
-        foreign_row, CASE how WHEN 'main_line' THEN
-          'it is the main line''s memory, and this writer does not hold the main line'
-          ELSE 'it belongs to another role''s session' END
-        USING ERRCODE = '42501';
+      RAISE EXCEPTION 'role % may not % % row %: it belongs to another role''s session',
+        current_user, lower(TG_OP), TG_TABLE_NAME, foreign_row USING ERRCODE = '42501';
     END IF;
   END LOOP;
   RETURN NULL;
@@ -134,8 +142,9 @@ BEGIN
   RETURN NULL;
 END $$;
 
--- ins, upd, del: how each write is judged ('owner' before the statement, NULL none, else
--- placedb_guard's argument, 'locations' placedb_guard_locations); TRUNCATE is the owner's.
+-- ins, upd, del: how each write is judged ('owner' and 'main_line' before the statement, NULL
+-- none, else placedb_guard's argument, 'locations' placedb_guard_locations); TRUNCATE is the
+-- owner's.
 CREATE FUNCTION placedb_guard_table(tab text, ins text, upd text, del text) RETURNS void
 LANGUAGE plpgsql AS $$
 DECLARE
@@ -146,9 +155,9 @@ BEGIN
                  'FOR EACH STATEMENT EXECUTE FUNCTION placedb_owner_only()', tab);
   FOREACH op IN ARRAY ARRAY['insert', 'update', 'delete'] LOOP
     how := CASE op WHEN 'insert' THEN ins WHEN 'update' THEN upd ELSE del END;
-    IF how = 'owner' THEN
+    IF how IN ('owner', 'main_line') THEN
       EXECUTE format('CREATE TRIGGER placedb_guard_%s BEFORE %s ON %I '
-                     'FOR EACH STATEMENT EXECUTE FUNCTION placedb_owner_only()', op, op, tab);
+                     'FOR EACH STATEMENT EXECUTE FUNCTION placedb_%s_only()', op, op, tab, how);
     ELSIF how IS NOT NULL THEN
       EXECUTE format('CREATE TRIGGER placedb_guard_%s AFTER %s ON %I REFERENCING %s '
                      'FOR EACH STATEMENT EXECUTE FUNCTION %s', op, op, tab,
