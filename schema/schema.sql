@@ -11,7 +11,8 @@ CREATE TABLE sessions (
   clean_close INTEGER NOT NULL DEFAULT 0 CHECK (clean_close IN (0, 1)),
   software_version TEXT NOT NULL,
   source TEXT NOT NULL,
-  source_digest TEXT                 -- what the source held at the start (schema 6); NULL: unknown
+  source_digest TEXT,                -- what the source held at the start (schema 6); NULL: unknown
+  settings_digest INTEGER            -- CRC-32C of its settings rows (schema 15)
 );
 
 -- The settings a session ran with, as text.
@@ -54,7 +55,11 @@ CREATE TABLE locations (
   session_id INTEGER NOT NULL REFERENCES sessions (id),
   weight INTEGER NOT NULL DEFAULT 0,
   tier INTEGER NOT NULL CHECK (tier IN (0, 1, 2)),  -- 0 STM, 1 WM, 2 LTM
-  created_frame INTEGER REFERENCES frames (id) DEFERRABLE INITIALLY DEFERRED
+  created_frame INTEGER REFERENCES frames (id) DEFERRABLE INITIALLY DEFERRED,
+  held INTEGER,                      -- which of its rows exist, bits (schema 15; see SCHEMA.md)
+  refs_digest INTEGER,               -- CRC-32C of its word_refs rows (schema 15)
+  checksum INTEGER,                  -- CRC-32C of id, session_id, weight, created_frame (schema 15)
+  link_count INTEGER                 -- links naming it (schema 15)
 );
 CREATE INDEX locations_by_session ON locations (session_id);
 CREATE INDEX locations_by_created_frame ON locations (created_frame);  -- schema 12
@@ -167,7 +172,8 @@ CREATE TABLE kd_nodes (
 -- foreign key on purpose: ids <= 0 stand for the filter's virtual "new place".
 CREATE TABLE filter_posterior (
   location_id INTEGER PRIMARY KEY,
-  probability REAL NOT NULL
+  probability REAL NOT NULL,
+  checksum INTEGER                   -- CRC-32C of location_id and probability (schema 15)
 );
 
 -- Views for people reading a map with sqlite3.
@@ -243,7 +249,8 @@ CREATE TABLE place_codes (
 -- transfer order's age. A location without a row (made before schema 4) has its id as age.
 CREATE TABLE wm_entries (
   location_id INTEGER PRIMARY KEY REFERENCES locations (id) ON DELETE CASCADE,
-  wm_age INTEGER NOT NULL
+  wm_age INTEGER NOT NULL,
+  checksum INTEGER                   -- CRC-32C of location_id and wm_age (schema 15)
 );
 
 -- Fleet maps (schema 11): several writers of a map on a PostgreSQL server, each in a session
@@ -314,5 +321,5 @@ INSERT INTO engine_state (key, value, checksum) VALUES ('storage.kd_nodes.rows',
 
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 14;
+PRAGMA user_version = 15;
 COMMIT;

@@ -28,6 +28,7 @@ target_sources(placedb_storage PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/src/map_copy.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/records.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/row_checksums.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/location_rows.cpp
   ${PLACEDB_MIGRATIONS_CPP}
   ${PLACEDB_PG_MIGRATIONS_CPP})
 # Includes are written from src/ ("sqlite/database.h"); each backend's room lists its own files.

@@ -6,10 +6,13 @@ pkg_check_modules(PLPLOT REQUIRED IMPORTED_TARGET plplot)
 add_library(placedb_cli STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/exit_codes.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/text_file.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/base64.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/whole_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/interrupt.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/settings_input.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/calibration_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/frame_log.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/log_recovery.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/frame_names.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/progress.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/map_argument.cpp

@@ -1,9 +1,12 @@
 #include "images.h"
 
+#include <algorithm>
+#include <cstdint>
 #include <cstring>
 #include <string>
 #include <vector>
 
+#include "features/image_conversion.h"
 #include "placedb/error.h"
 #include "sources/image_source.h"
 
@@ -34,6 +37,13 @@ cv::Mat imageOf(const py::array& image, py::array& contiguous) {
   if (channels != 1 && channels != 3 && channels != 4)
     refuse(std::to_string(channels) + " channels, expected 1, 3 (BGR) or 4 (BGRA)");
   if (image.shape(0) == 0 || image.shape(1) == 0) refuse("empty");
+  // Judged from the shape, before the copy below: a stride-0 view of 100000 x 100000 pixels is a
+  // few bytes of numpy and ~10 GB once made contiguous.
+  const auto side = [](py::ssize_t n) {
+    return static_cast<std::uint32_t>(std::min<py::ssize_t>(n, 0xffffffff));
+  };
+  const ImageDimensions size{side(image.shape(1)), side(image.shape(0))};
+  if (!withinImageLimits(size)) refuse(imageLimitProblem(size));
   const int depth = depthOf(image.dtype());
   // Slices and transposes are copied into one C-ordered block; a C-ordered array is used as is.
   contiguous = py::array::ensure(image, py::array::c_style);

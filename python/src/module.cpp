@@ -21,6 +21,7 @@
 #include "frame_names.h"
 #include "images.h"
 #include "map_rows.h"
+#include "output_guard.h"
 #include "placedb/error.h"
 #include "placedb/map.h"
 #include "placedb/options.h"
@@ -173,11 +174,9 @@ bool isRtabmap(const std::string& format) {
 std::size_t exportVocabulary(const std::string& map_path, const std::string& file,
                              const std::string& format) {
   const bool text = isRtabmap(format);
+  cli::refuseMapAsOutput("vocab_export", map_path, file);
   const vocab::VocabularyData words = cli::wordsOfMap(map_path);
-  if (text)
-    vocab::writeVocabularyText(file, words);
-  else
-    vocab::writeVocabularyFile(file, words);
+  cli::writeVocabulary(file, words, text);
   return words.ids.size();
 }
 

@@ -1,6 +1,7 @@
 #include "placedb/storage/records.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <cstring>
 #include <functional>
 
@@ -79,6 +80,22 @@ bool LocationWordDescriptors::decode(std::int64_t location, int dimension, const
   created_frames = std::move(created);
   descriptors = std::move(values);
   return true;
+}
+
+std::string locationKeypointsKey(std::int64_t location_id) {
+  return kLocationKeypointsKeyPrefix + std::to_string(location_id);
+}
+
+std::optional<std::int64_t> locationOfKeypointsKey(const std::string& key) {
+  const std::string prefix = kLocationKeypointsKeyPrefix;
+  if (key.size() <= prefix.size() || key.compare(0, prefix.size(), prefix) != 0)
+    return std::nullopt;
+  std::int64_t id = 0;
+  for (std::size_t i = prefix.size(); i < key.size(); ++i) {
+    if (key[i] < '0' || key[i] > '9' || id > (INT64_MAX - 9) / 10) return std::nullopt;
+    id = id * 10 + (key[i] - '0');
+  }
+  return id;
 }
 
 }  // namespace placedb::storage

@@ -140,10 +140,99 @@ std::uint32_t kdNodeChecksum(std::int64_t tree, std::int64_t node, std::int64_t 
   return crc.checksum();
 }
 
+std::uint32_t settingsDigest(std::int64_t session_id, const std::string& source,
+                             const std::map<std::string, std::string>& settings) {
+  Crc32c crc;
+  addInt(crc, session_id);
+  addInt(crc, static_cast<std::int64_t>(source.size()));
+  crc.process_bytes(source.data(), source.size());
+  for (const auto& [key, value] : settings)
+    for (const std::string* text : {&key, &value}) {
+      addInt(crc, static_cast<std::int64_t>(text->size()));
+      crc.process_bytes(text->data(), text->size());
+    }
+  return crc.checksum();
+}
+
+std::uint32_t locationChecksum(std::int64_t id, std::int64_t session_id, std::int64_t weight,
+                               std::optional<std::int64_t> created_frame) {
+  Crc32c crc;
+  addInt(crc, id);
+  addInt(crc, session_id);
+  addInt(crc, weight);
+  addInt(crc, created_frame.value_or(-1));
+  return crc.checksum();
+}
+
+std::uint32_t wmEntryChecksum(std::int64_t location_id, std::int64_t wm_age) {
+  Crc32c crc;
+  addInt(crc, location_id);
+  addInt(crc, wm_age);
+  return crc.checksum();
+}
+
+std::uint32_t posteriorChecksum(std::int64_t location_id, double probability) {
+  Crc32c crc;
+  addInt(crc, location_id);
+  addDouble(crc, probability);
+  return crc.checksum();
+}
+
+namespace {
+
+void appendInt(std::string& bytes, std::int64_t value) {
+  const auto u = static_cast<std::uint64_t>(value);
+  for (int i = 0; i < 8; ++i) bytes.push_back(static_cast<char>(u >> (8 * i)));
+}
+
+void appendDouble(std::string& bytes, double value) {
+  std::int64_t bits = 0;
+  std::memcpy(&bits, &value, sizeof bits);
+  appendInt(bytes, bits);
+}
+
+}  // namespace
+
+RefsDigest::RefsDigest(std::int64_t location_id) { appendInt(bytes_, location_id); }
+
+void RefsDigest::add(std::int64_t word_id, double x, double y, double size, double angle,
+                     double response) {
+  appendInt(bytes_, word_id);
+  for (double v : {x, y, size, angle, response}) appendDouble(bytes_, v);
+  ++count_;
+}
+
+std::uint32_t RefsDigest::value() const {
+  Crc32c crc;
+  crc.process_bytes(bytes_.data(), bytes_.size());
+  addInt(crc, count_);
+  return crc.checksum();
+}
+
+std::uint32_t refsDigest(std::int64_t location_id, const std::vector<WordRef>& refs) {
+  RefsDigest digest(location_id);
+  for (const WordRef& r : refs) digest.add(r.word_id, r.x, r.y, r.size, r.angle, r.response);
+  return digest.value();
+}
+
+std::string refValueFault(double x, double y, double size, double angle, double response) {
+  // Keypoints lie inside an image of at most kMaxImageSide (16384) pixels a side; the margin
+  // leaves room for detectors that place a keypoint just outside.
+  constexpr double kMaxPosition = 65536;
+  for (double v : {x, y, size, angle, response})
+    if (!std::isfinite(v)) return "holds a keypoint value that is not a finite number";
+  if (std::abs(x) > kMaxPosition || std::abs(y) > kMaxPosition)
+    return "holds a keypoint position beyond any image";
+  if (size < 0 || size > kMaxPosition) return "holds a keypoint size beyond any image";
+  if (angle < -1 || angle > 360) return "holds a keypoint angle outside [-1, 360]";
+  return "";
+}
+
 void refuseDamagedRow(const std::string& path, const std::string& table, const std::string& row,
                       const std::string& what) {
   throw StorageError(ErrorCode::kMapRefused,
-                     "map " + path + " damaged: " + table + " row " + row + " " + what +
+                     "map " + path + " damaged: " + table + (row.empty() ? "" : " row " + row) +
+                         " " + what +
                          "; nothing was written (placedb check lists every damaged row)");
 }
 

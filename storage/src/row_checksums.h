@@ -11,8 +11,10 @@
 // number of rows is kept in engine_state (kKdNodeRowsKey) and compared when the forest loads.
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "placedb/storage/records.h"
 
@@ -33,6 +35,43 @@ std::uint32_t locationWordDescriptorsChecksum(std::int64_t location_id, std::int
 std::uint32_t stateChecksum(const std::string& key, const void* value, std::size_t size);
 std::uint32_t kdNodeChecksum(std::int64_t tree, std::int64_t node, std::int64_t left,
                              std::int64_t right, std::int64_t split_dim, double split_value);
+
+// Resume rows without a BLOB that the engine reads back (schema 15): a WM age, a posterior
+// probability.
+std::uint32_t wmEntryChecksum(std::int64_t location_id, std::int64_t wm_age);
+std::uint32_t posteriorChecksum(std::int64_t location_id, double probability);
+
+// What a session runs over (schema 15, sessions.settings_digest): its id, its source, then every
+// key and value of its settings rows, by key; each text as its length and its bytes.
+std::uint32_t settingsDigest(std::int64_t session_id, const std::string& source,
+                             const std::map<std::string, std::string>& settings);
+
+// A location's row (schema 15, locations.checksum): its id, session, weight and creating frame
+// (-1 for none). Its tier is the counters' to check, its held bits and digest are checked
+// against the rows they describe.
+std::uint32_t locationChecksum(std::int64_t id, std::int64_t session_id, std::int64_t weight,
+                               std::optional<std::int64_t> created_frame);
+
+// The digest of a location's word references (schema 15, locations.refs_digest), so that a
+// reference deleted or added is found as a changed one is: its id, then every reference in
+// ordinal order (word id, then x, y, size, angle and response as the REALs stored), then their
+// number. Built row by row as they are written or read.
+class RefsDigest {
+ public:
+  explicit RefsDigest(std::int64_t location_id);
+  void add(std::int64_t word_id, double x, double y, double size, double angle, double response);
+  std::uint32_t value() const;
+  std::int64_t count() const { return count_; }
+
+ private:
+  std::string bytes_;
+  std::int64_t count_ = 0;
+};
+std::uint32_t refsDigest(std::int64_t location_id, const std::vector<WordRef>& refs);
+
+// What is wrong with a reference's keypoint, or "" (a value no detector gives: not finite, a
+// position or size beyond any image placedb takes, an angle outside [-1, 360]).
+std::string refValueFault(double x, double y, double size, double angle, double response);
 
 // What is wrong with a location_word_descriptors row's words beyond its checksum, or "" when they
 // decode to ascending words of `dim` finite values (then into `out`, when given).

@@ -119,13 +119,13 @@ TEST(CliFaults, DamagedEngineValuesAreRefusedBeforeAnyWrite) {
          sqlExec(map,
                  "UPDATE locations SET weight = -3 WHERE id = (SELECT min(id) FROM locations)");
        },
-       "weight"},
+       "locations row"},  // its checksum (schema 15) finds it before its value is judged
       {[](const fs::path& map) {
          sqlExec(map,
                  "UPDATE filter_posterior SET probability = -1e999 "
                  "WHERE location_id = (SELECT min(location_id) FROM filter_posterior)");
        },
-       "posterior"},
+       "filter_posterior row"},
   };
   int n = 0;
   for (const auto& [apply, names] : damage) {
@@ -137,6 +137,56 @@ TEST(CliFaults, DamagedEngineValuesAreRefusedBeforeAnyWrite) {
     EXPECT_EQ(r.exit_code, 4) << names << ": " << describe(r);
     EXPECT_NE(r.err.find(map.string()), std::string::npos) << r.err;
     EXPECT_NE(r.err.find(names), std::string::npos) << r.err;
+    EXPECT_TRUE(bytesOf(map) == before) << names;
+  }
+}
+
+// What check reports, map and query refuse (exit 4, naming table and row) and leave the file
+// byte-identical; before, map wrote on a map check called damaged, query answered on a tier of 7,
+// and counters behind the rows (their sum forged) passed check and failed map after it wrote.
+TEST(CliFaults, WhatCheckReportsMapAndQueryRefuseBeforeAnyWrite) {
+  auto seq = smallSequence(12);
+  auto dir = scratchDir("CliFaults_check_agrees");
+  auto good = mappedCopy(seq, dir, "good.placedb", {"--stop-after", "8"});
+  const auto forgeCounter = [](const fs::path& map) {
+    storage::SqliteMapStore store(map.string(), storage::OpenMode::kReadWrite);
+    auto counters = nlohmann::json::parse(*store.getStateText("engine.counters"));
+    counters["next_frame_id"] = 3;  // below the frames there are, its sum written as placedb does
+    store.putState("engine.counters", counters.dump());
+  };
+  const std::vector<std::pair<std::function<void(const fs::path&)>, std::string>> damage = {
+      {[](const fs::path& map) {
+         sqlExec(map, "DELETE FROM locations WHERE id = (SELECT max(id) FROM locations)");
+       },
+       "refers to a missing row of locations"},
+      {[](const fs::path& map) { sqlExec(map, "DELETE FROM frames WHERE id = 4"); },
+       "refers to a missing row of frames"},
+      {[](const fs::path& map) {
+         sqlExec(map,
+                 "PRAGMA ignore_check_constraints = 1; UPDATE locations SET tier = 7 "
+                 "WHERE id = (SELECT min(id) FROM locations)");
+       },
+       "locations"},
+      {forgeCounter, "next_frame_id"},
+      {[](const fs::path& map) {
+         sqlExec(map,
+                 "DELETE FROM engine_state WHERE key = 'keypoint_descriptors/' || "
+                 "(SELECT min(id) FROM locations)");
+       },
+       "keypoint_descriptors"},
+  };
+  int n = 0;
+  for (const auto& [apply, names] : damage) {
+    auto map = dir / ("d" + std::to_string(n++) + ".placedb");
+    fs::copy_file(good, map, fs::copy_options::overwrite_existing);
+    apply(map);
+    const std::string before = bytesOf(map);
+    expectCleanError(placedb({"check", map.string(), "-q"}, dir), 4, map.string());
+    auto mapped = placedb({"map", map.string(), (seq / "frames.txt").string(), "-q"}, dir);
+    expectCleanError(mapped, 4, names);
+    expectCleanError(
+        placedb({"query", map.string(), (seq / "images" / "000001.png").string()}, dir), 4,
+        map.string());
     EXPECT_TRUE(bytesOf(map) == before) << names;
   }
 }
@@ -153,6 +203,16 @@ TEST(CliFaults, SchemaVersionBelowTheTablesIsOneLineRefusal) {
   expectCleanError(r, 4, map.string());
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_EQ(r.err.find("in statement"), std::string::npos) << r.err;
+  EXPECT_TRUE(bytesOf(map) == before);
+  // `check` reports what `map` refuses (it said "sound"), and `query` refuses it too.
+  auto check = placedb({"check", map.string(), "-q"}, dir);
+  expectCleanError(check, 4, "schema");
+  EXPECT_NE(
+      check.out.find("the map says schema " + std::to_string(storage::currentSchemaVersion() - 1)),
+      std::string::npos)
+      << check.out;
+  expectCleanError(placedb({"query", map.string(), (seq / "images" / "000001.png").string()}, dir),
+                   4, map.string());
   EXPECT_TRUE(bytesOf(map) == before);
 }
 
@@ -186,13 +246,18 @@ TEST(CliFaults, FullDiskUnderTheLogIsDiskFullWithWholeRows) {
   EXPECT_GT(rows, 0u);
   EXPECT_LT(rows, 40u);
 
-  // With room again the session resumes; the log keeps whole rows only.
+  // With room again the session resumes; the log keeps whole rows only, and gets back the row
+  // of the frame that filled the disk (the map has that frame): every frame once.
   ASSERT_TRUE(disk.resize("1m"));
   auto rest = placedb({"map", map, source, "--log", log, "-q"}, dir);
   ASSERT_EQ(rest.exit_code, 0) << describe(rest);
   expectWholeRows(log);
   storage::SqliteMapStore store(map, storage::OpenMode::kReadOnly);
   EXPECT_EQ(store.frameCount(), 40);
+  const cli::CsvTable table = cli::readCsv(log);
+  ASSERT_EQ(table.rows.size(), 40u);
+  for (std::size_t i = 0; i < table.rows.size(); ++i)
+    EXPECT_EQ(table.cell(i, table.column("frame")), std::to_string(i));
 }
 
 TEST(CliFaults, FullDiskUnderAVocabularyExportIsDiskFullWithNoFileLeft) {

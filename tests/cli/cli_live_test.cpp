@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sqlite3.h>
+#include <sys/resource.h>
 
 #include <chrono>
 #include <opencv2/imgcodecs.hpp>
@@ -33,12 +34,16 @@ std::vector<std::string> jpegFrames(const fs::path& seq, const fs::path& dir, in
   return files;
 }
 
-// A stream of `fps` frames a second for `seconds` seconds; returns the server and its URL.
-std::pair<std::unique_ptr<ChildProcess>, std::string> serve(const std::vector<std::string>& frames,
-                                                            double fps, double seconds) {
+// A stream of `fps` frames a second for `seconds` seconds, with the server's `faults`
+// (serve_mjpeg.py: --parts, --garbage-at, --huge-at, --stall-after); returns the server and its
+// URL.
+std::pair<std::unique_ptr<ChildProcess>, std::string> serve(
+    const std::vector<std::string>& frames, double fps, double seconds,
+    const std::vector<std::string>& faults = {}) {
   std::vector<std::string> args = {"/usr/bin/python3", PLACEDB_MJPEG_SERVER, std::to_string(fps),
                                    std::to_string(seconds)};
   args.insert(args.end(), frames.begin(), frames.end());
+  args.insert(args.end(), faults.begin(), faults.end());
   auto server = std::make_unique<ChildProcess>(args);
   const auto port = server->readLine(10000);
   EXPECT_TRUE(port) << "the stream server did not start";
@@ -95,7 +100,7 @@ TEST(CliLive, InterruptClosesTheSessionCleanlyAndTheNextRunIsANewSession) {
     mapping.signal(SIGINT);
     const auto r = mapping.wait();
     EXPECT_EQ(r.exit_code, 0) << describe(r);
-    EXPECT_NE(r.err.find("interrupted; the session is closed"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("stopped by SIGINT; the session is closed"), std::string::npos) << r.err;
     EXPECT_EQ(count(map, "SELECT count(*) FROM sessions"), run);
     EXPECT_EQ(count(map, "SELECT min(clean_close) FROM sessions"), 1);
     EXPECT_GT(count(map, "SELECT count(*) FROM frames WHERE session_id = " + std::to_string(run)),
@@ -105,13 +110,109 @@ TEST(CliLive, InterruptClosesTheSessionCleanlyAndTheNextRunIsANewSession) {
   }
 }
 
+// The frames and dropped frames of a run's summary line.
+std::pair<int, int> takenAndDropped(const std::string& err) {
+  std::smatch m;
+  if (!std::regex_search(err, m, std::regex("(\\d+) frames .*; (\\d+) dropped while busy")))
+    return {-1, -1};
+  return {std::stoi(m[1]), std::stoi(m[2])};
+}
+
+// A part that is no image is a bad frame, and the stream goes on to its end: every part sent is
+// either taken or dropped. (FFmpeg ended the session there, as "end of source".)
+TEST(CliLive, APartThatIsNoImageIsABadFrameAndTheStreamGoesOn) {
+  auto seq = smallSequence(10);
+  auto dir = scratchDir("CliLive_garbage");
+  auto [server, url] =
+      serve(jpegFrames(seq, dir, 10), 10, 60, {"--parts", "30", "--garbage-at", "3"});
+  const fs::path map = dir / "live.placedb";
+  const auto r = placedb({"map", map.string(), url}, dir);
+  EXPECT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_NE(r.err.find("(end of source)"), std::string::npos) << r.err;
+  const auto [taken, dropped] = takenAndDropped(r.err);
+  EXPECT_EQ(taken + dropped, 30) << r.err;
+  EXPECT_EQ(count(map, "SELECT count(*) FROM frames"), taken);
+  // Taken, the part is a bad frame with a warning naming it.
+  const std::int64_t bad = count(map, "SELECT count(*) FROM frames WHERE outcome = 2");
+  EXPECT_LE(bad, 1);
+  if (bad == 1) {
+    EXPECT_NE(r.err.find("that is no image; recorded as a bad frame"), std::string::npos) << r.err;
+  }
+  server->exitCode();
+}
+
+// A part announcing 200 MB is skipped from its header: it is never held in memory (FFmpeg took
+// ~500 MB for it and ended the session), and the stream goes on.
+TEST(CliLive, APartOverTheImageLimitIsSkippedFromItsHeader) {
+  auto seq = smallSequence(10);
+  auto dir = scratchDir("CliLive_huge");
+  auto [server, url] = serve(jpegFrames(seq, dir, 10), 10, 60, {"--parts", "20", "--huge-at", "2"});
+  const fs::path map = dir / "live.placedb";
+  const auto r = placedb({"map", map.string(), url}, dir);
+  EXPECT_EQ(r.exit_code, 0) << describe(r);
+  const auto [taken, dropped] = takenAndDropped(r.err);
+  EXPECT_EQ(taken + dropped, 20) << r.err;
+  EXPECT_NE(r.err.find("(end of source)"), std::string::npos) << r.err;
+  server->exitCode();
+  rusage usage{};
+  ASSERT_EQ(getrusage(RUSAGE_CHILDREN, &usage), 0);
+  EXPECT_LT(usage.ru_maxrss, 150 * 1024) << "KiB at most in a child (placedb or the server)";
+}
+
+// A stream that stops sending without ending is its own end: a warning, the session closed with
+// every frame, exit 14. (It read as "end of source", exit 0.)
+TEST(CliLive, AStalledStreamEndsWithAWarningAndExit14) {
+  auto seq = smallSequence(10);
+  auto dir = scratchDir("CliLive_stall");
+  auto [server, url] = serve(jpegFrames(seq, dir, 10), 10, 60, {"--stall-after", "4"});
+  const fs::path map = dir / "live.placedb";
+  const auto r = placedb({"map", map.string(), url}, dir);
+  EXPECT_EQ(r.exit_code, 14) << describe(r);
+  EXPECT_NE(r.err.find("placedb: warning: live source " + url + " sent nothing for 5 s"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("(stalled: the stream sent nothing)"), std::string::npos) << r.err;
+  const auto [taken, dropped] = takenAndDropped(r.err);
+  EXPECT_EQ(taken + dropped, 4) << r.err;
+  EXPECT_EQ(count(map, "SELECT clean_close FROM sessions"), 1);
+  server->kill();
+  server->exitCode();
+}
+
+// Ctrl-C while `map` waits for the stream's next frame says it stopped, not that the source
+// ended. The stream sends one frame and then nothing: once that frame is in the map, map waits.
+TEST(CliLive, InterruptWhileWaitingForAFrameSaysStopped) {
+  auto seq = smallSequence(10);
+  auto dir = scratchDir("CliLive_interrupt_waiting");
+  auto [server, url] = serve(jpegFrames(seq, dir, 10), 10, 60, {"--stall-after", "1"});
+  const fs::path map = dir / "live.placedb";
+  Process mapping({PLACEDB_CLI_BINARY, "map", map.string(), url}, dir);
+  for (int tries = 0;
+       tries < 400 && !(fs::exists(map) && count(map, "SELECT count(*) FROM frames") == 1); ++tries)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  mapping.signal(SIGINT);
+  const auto r = mapping.wait();
+  EXPECT_EQ(r.exit_code, 0) << describe(r);
+  EXPECT_NE(r.err.find("(stopped by SIGINT; the session is closed)"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("end of source"), std::string::npos) << r.err;
+  EXPECT_EQ(count(map, "SELECT clean_close FROM sessions"), 1);
+  server->kill();
+  server->exitCode();
+}
+
 TEST(CliLive, UnreachableStreamAndMisplacedOptionsAreOneLine) {
   auto seq = smallSequence(3);
   auto dir = scratchDir("CliLive_refused");
   const auto map = (dir / "m.placedb").string();
+  // An HTTP stream is placedb's own MJPEG reader's, which names the socket's error; any other
+  // goes to FFmpeg, whose failure is named with what it may mean.
   const auto stream = placedb({"map", map, "http://127.0.0.1:9/none.mjpg"}, dir);
-  expectCleanError(stream, 3, "http://127.0.0.1:9/none.mjpg");
-  EXPECT_NE(stream.err.find("FFmpeg could not open it"), std::string::npos) << stream.err;
+  expectCleanError(stream, 3, "http://127.0.0.1:9/none.mjpg: Connection refused");
+  const auto rtsp = placedb({"map", map, "rtsp://127.0.0.1:9/none"}, dir);
+  expectCleanError(rtsp, 3, "rtsp://127.0.0.1:9/none");
+  EXPECT_TRUE(rtsp.err.find("FFmpeg could not open it") != std::string::npos ||
+              rtsp.err.find("no FFmpeg backend") != std::string::npos)
+      << rtsp.err;
   // A camera that is not there: the device tried, and the cameras there are.
   const auto camera = placedb({"map", map, "camera:99"}, dir);
   expectCleanError(camera, 3, "cannot open live source camera:99: ");

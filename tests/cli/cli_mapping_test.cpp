@@ -15,6 +15,7 @@
 #include "cli_scratch.h"
 #include "cli_test_support.h"
 #include "frame_log.h"
+#include "kill_at_write.h"
 #include "synthetic/synthetic_sequence.h"
 
 namespace placedb::testing {
@@ -393,6 +394,39 @@ TEST(CliSyntheticSequence, ResumeAfterLostCommitsCutsTheLogBack) {
   const CsvTable log = readCsv(b_log);
   EXPECT_EQ(frameColumn(log), range(0, 59));
   expectSameScoredRows(readCsv(dir / "a.csv"), log);
+}
+
+// Killed between a frame's commit and its log row (SIGKILL at the entry of the row's write): the
+// map holds the frame, the log lacks it. The resume writes the row back from the map, so the
+// log holds every frame once, scored as in a straight run.
+TEST(CliSyntheticSequence, KillBetweenCommitAndLogRowLosesNoRow) {
+  if (!kCanKillAtWrite) GTEST_SKIP() << "the system-call trap reads x86-64 registers";
+  auto seq = demoSequence();
+  auto dir = scratchDir("CliSynthetic_kill_before_row");
+  auto source = (seq / "frames.txt").string();
+  auto straight = placedb(
+      {"map", (dir / "a.placedb").string(), source, "--log", (dir / "a.csv").string()}, dir);
+  ASSERT_EQ(straight.exit_code, 0) << describe(straight);
+
+  const auto b = (dir / "b.placedb").string();
+  const fs::path b_log = dir / "b.csv";
+  bool killed = false;
+  // Write 1 is the header; write 27 would be the row of frame 25.
+  runKilledAtWrite({PLACEDB_CLI_BINARY, "map", b, source, "--log", b_log.string(), "-q"}, b_log, 27,
+                   &killed);
+  ASSERT_TRUE(killed) << "the run ended before its 27th write to the log";
+  EXPECT_EQ(frameColumn(readCsv(b_log)), range(0, 24));
+  EXPECT_EQ(info(b, dir)["sessions"][0]["last_source_index"], 25);
+
+  auto resumed = placedb({"map", b, source, "--log", b_log.string()}, dir);
+  ASSERT_EQ(resumed.exit_code, 0) << describe(resumed);
+  EXPECT_NE(resumed.err.find("wrote back from the map the rows of frame 25,"), std::string::npos)
+      << resumed.err;
+  const CsvTable log = readCsv(b_log);
+  EXPECT_EQ(frameColumn(log), range(0, 59));
+  expectSameScoredRows(readCsv(dir / "a.csv"), log);
+  // The summary counts this run's frames, not the one written back.
+  EXPECT_NE(resumed.err.find(": 34 frames"), std::string::npos) << resumed.err;
 }
 
 TEST(CliSyntheticSequence, LogToStandardOutput) {

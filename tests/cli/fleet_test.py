@@ -11,8 +11,8 @@ restarts it, so it cannot share ctest's pg_server fixture):
 3. B losing the server for 5 s with --server-wait 1 (exit 13, then resumed), then killed with
    SIGKILL at random points and resumed: the map holds every frame of B once, with the
    baseline's decisions (every frame row and hypothesis but the times, ids included).
-4. The server stopped for 5 s during B (default --server-wait): B waits, goes on and ends with
-   the baseline's decisions.
+4. The server stopped at once for 5 s during B (default --server-wait): B waits, goes on and
+   ends with the baseline's decisions; its summary and its log count every frame once.
 
 Exit 77 (ctest: skipped) with a message where the server binaries or the data sets are absent.
 Usage: fleet_test.py PLACEDB WORK_DIR [--quick] [--seed N]
@@ -43,8 +43,9 @@ def check(ok, what):
     return ok
 
 
-def start_map(binary, uri, source, log, *extra):
-    return subprocess.Popen([binary, "map", uri, source, "--log", log, "-q", *extra],
+def start_map(binary, uri, source, log, *extra, quiet=True):
+    return subprocess.Popen([binary, "map", uri, source, "--log", log, *(["-q"] if quiet else []),
+                             *extra],
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
 
 
@@ -183,14 +184,19 @@ def main():
               f"({len(got)} rows, {len(set(indices))} distinct)")
         check(got == baseline, "and the decisions of an uninterrupted B (every frame and "
               "hypothesis column but the times)" + describe_difference(got, baseline))
+        logged = [int(row["frame"]) for row in fs.read_log(w("killed_b.csv"))]
+        check(logged == list(range(b_frames)),
+              f"and B's log holds each frame once, in order ({len(logged)} rows): a row a kill "
+              "took between the frame's commit and its write is written back from the map")
 
-        # 4. The server stopped for 5 s during B: B waits and goes on.
+        # 4. The server stopped for 5 s during B, at once (its last commits, not yet flushed
+        # under synchronous_commit = off, are lost): B waits, goes on, maps the lost frames again.
         waited_uri = server.database("waited")
         fs.copy_map(pb, w("a.placedb"), waited_uri)
-        p = start_map(pb, waited_uri, lists["B"], w("waited_b.csv"))
+        p = start_map(pb, waited_uri, lists["B"], w("waited_b.csv"), quiet=False)
         fs.wait_for_frames(waited_uri, 2, 5)
         time.sleep(rng.uniform(0.2, 2.0))
-        server.stop()
+        server.stop("immediate")
         time.sleep(5)
         server.start()
         err = finish(p, "B over a 5 s server stop")
@@ -199,6 +205,12 @@ def main():
         got = fs.decisions_of_server(waited_uri, 2)
         check(got == baseline, "B's decisions after the wait are an uninterrupted B's" +
               describe_difference(got, baseline))
+        summary = [line for line in err.splitlines() if line.startswith("placedb: session 2:")]
+        check(len(summary) == 1 and f": {b_frames} frames (" in summary[0],
+              f"B's summary counts each of its {b_frames} frames once: {summary}")
+        logged = [int(row["frame"]) for row in fs.read_log(w("waited_b.csv"))]
+        check(sorted(logged) == list(range(b_frames)) == logged,
+              f"B's log holds each frame once, in order ({len(logged)} rows)")
     finally:
         server.stop("immediate")
         shutil.rmtree(server.folder, ignore_errors=True)

@@ -7,6 +7,8 @@
 #include <csignal>
 #include <cstdlib>
 #include <fstream>
+#include <map>
+#include <sstream>
 #include <thread>
 
 #include <nlohmann/json.hpp>
@@ -21,6 +23,41 @@ namespace placedb::testing {
 namespace {
 
 namespace fs = std::filesystem;
+
+// SCHEMA.md's grants of a robot that maps, run as the section "Roles" gives them (its first sql
+// block, the CREATE ROLE left out) for `role` on the map `uri` in database `db`: the tests prove
+// the grants the document gives, not a copy of them.
+void grantRobot(const std::string& uri, const std::string& db, const std::string& role) {
+  std::ifstream in(PLACEDB_SCHEMA_DOC);
+  ASSERT_TRUE(in) << PLACEDB_SCHEMA_DOC;
+  const std::string doc((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto section = doc.find("\n### Roles\n");
+  ASSERT_NE(section, std::string::npos) << "SCHEMA.md has no section Roles";
+  const auto open = doc.find("```sql\n", section);
+  ASSERT_NE(open, std::string::npos) << "SCHEMA.md's Roles gives no sql block";
+  const auto close = doc.find("```", open + 7);
+  std::istringstream lines(doc.substr(open + 7, close - open - 7));
+  std::string sql, line;
+  while (std::getline(lines, line))
+    if (line.rfind("--", 0) != 0) sql += line + "\n";
+  int grants = 0;
+  for (std::size_t at = 0, end; (end = sql.find(';', at)) != std::string::npos; at = end + 1) {
+    std::string statement = sql.substr(at, end - at);
+    statement.erase(0, statement.find_first_not_of(" \n"));
+    if (statement.rfind("CREATE ROLE", 0) == 0) continue;
+    ASSERT_EQ(statement.rfind("GRANT ", 0), 0u) << statement;
+    const auto replace = [&statement](const std::string& from, const std::string& to) {
+      const auto found = statement.find(from);
+      if (found != std::string::npos) statement.replace(found, from.size(), to);
+    };
+    replace(" DATABASE fleet ", " DATABASE " + db + " ");
+    ASSERT_NE(statement.find(" TO robot"), std::string::npos) << statement;
+    replace(" TO robot", " TO " + role);
+    pgAdmin(uri, statement);
+    ++grants;
+  }
+  EXPECT_EQ(grants, 6) << "SCHEMA.md's Roles changed: check the tests that use its grants";
+}
 
 // frames [first, first + count) of lip6_outdoor as a list of absolute paths, or "" when absent.
 std::string lip6List(const fs::path& dir, const std::string& name, int first, int count) {
@@ -248,12 +285,7 @@ TEST_F(PgCli, LeastPrivilegeRobotMapsAndQueriesWithAPasswordFile) {
   pgAdmin(server_, "DROP ROLE IF EXISTS cli_fleet_robot");
   pgAdmin(server_, "CREATE ROLE cli_fleet_robot LOGIN PASSWORD 'pass-file-secret'");
   // The grants as SCHEMA.md gives them.
-  pgAdmin(server_, "GRANT CONNECT ON DATABASE " + db + " TO cli_fleet_robot");
-  pgAdmin(uri, "GRANT USAGE ON SCHEMA public TO cli_fleet_robot");
-  pgAdmin(uri, "GRANT SELECT, INSERT, UPDATE ON ALL TABLES IN SCHEMA public TO cli_fleet_robot");
-  pgAdmin(uri,
-          "GRANT DELETE ON engine_state, filter_posterior, kd_nodes, locations, word_refs, "
-          "session_state, session_kd_nodes, session_posterior, session_memory TO cli_fleet_robot");
+  ASSERT_NO_FATAL_FAILURE(grantRobot(uri, db, "cli_fleet_robot"));
 
   const std::string host = uri.substr(uri.find("host="), uri.find('&') - uri.find("host="));
   const fs::path pass_file = dir_ / "pgpass";
@@ -307,6 +339,98 @@ TEST_F(PgCli, LeastPrivilegeRobotMapsAndQueriesWithAPasswordFile) {
     PQclear(r);
   }
   PQfinish(conn);
+}
+
+// Two robots with SCHEMA.md's grants map a fleet map one after the other (each holds the main line
+// while it maps). Then robot B, connected as a tool would be and holding no lock, cannot touch
+// A's places, references, keypoints or session, the main line's memory, or the metadata: each
+// write is refused with SQLSTATE 42501, also after B is granted every privilege on the tables
+// (the map owner's triggers confine it, not only the grants). The fleet is not locked out: the
+// owner's info and check still answer, and B can still map its own session.
+TEST_F(PgCli, RobotsCannotTouchOtherRobotsPlacesNorLockTheFleetOut) {
+  const std::string list_a = lip6List(dir_, "lip6_a.txt", 0, 6);
+  if (list_a.empty()) GTEST_SKIP() << "lip6_outdoor absent under " << datasetsDir();
+  const std::string list_b = lip6List(dir_, "lip6_b.txt", 300, 6);
+  const std::string list_b2 = lip6List(dir_, "lip6_b2.txt", 600, 3);
+  const std::string uri = database("");
+  ASSERT_EQ(placedb({"map", uri, lip6List(dir_, "lip6_o.txt", 900, 3), "-q"}, dir_).exit_code, 0);
+  const std::string db = pgTestDatabaseName();
+  const std::string host = uri.substr(uri.find("host="), uri.find('&') - uri.find("host="));
+  std::map<std::string, std::string> robot_uri;
+  for (const std::string role : {"cli_robot_a", "cli_robot_b"}) {
+    pgAdmin(server_, "DROP ROLE IF EXISTS " + role);
+    pgAdmin(server_, "CREATE ROLE " + role + " LOGIN PASSWORD 'robot-secret'");
+    ASSERT_NO_FATAL_FAILURE(grantRobot(uri, db, role));
+    robot_uri[role] = "postgresql://" + role + ":robot-secret@/" + db + "?" + host;
+  }
+  auto a = placedb({"map", robot_uri["cli_robot_a"], list_a, "-q"}, dir_);
+  ASSERT_EQ(a.exit_code, 0) << describe(a);
+  auto b = placedb({"map", robot_uri["cli_robot_b"], list_b, "-q"}, dir_);
+  ASSERT_EQ(b.exit_code, 0) << describe(b);
+
+  PGconn* conn = PQconnectdb(robot_uri["cli_robot_b"].c_str());
+  ASSERT_EQ(PQstatus(conn), CONNECTION_OK) << PQerrorMessage(conn);
+  const std::string a_place = "(SELECT min(id) FROM locations WHERE session_id = 2)";
+  const std::vector<std::string> attacks = {
+      "UPDATE placedb_meta SET value = '99' WHERE key = 'schema_version'",
+      "DELETE FROM placedb_meta",
+      "DELETE FROM locations",
+      "DELETE FROM locations WHERE session_id = 2",
+      "UPDATE locations SET weight = weight + 1 WHERE session_id = 2",
+      "UPDATE locations SET tier = 2 WHERE session_id = 2",
+      "UPDATE locations SET session_id = 3 WHERE session_id = 2",
+      "UPDATE locations SET link_count = link_count + 5 WHERE session_id = 2",
+      "UPDATE locations SET held = 0 WHERE session_id = 2",
+      "INSERT INTO locations (id, session_id, weight, tier, created_frame) "
+      "VALUES (999999, 2, 1, 1, 1)",
+      "DELETE FROM word_refs WHERE location_id = " + a_place,
+      "INSERT INTO word_refs SELECT location_id, 9999, word_id, x, y, size, angle, response "
+      "FROM word_refs WHERE location_id = " +
+          a_place + " LIMIT 1",
+      "UPDATE engine_state SET value = value WHERE key = 'keypoint_descriptors/' || " + a_place,
+      "UPDATE engine_state SET value = value WHERE key = 'engine.counters'",
+      "DELETE FROM engine_state",
+      "DELETE FROM filter_posterior",
+      "UPDATE kd_nodes SET split_value = 0",
+      "DELETE FROM links",
+      "UPDATE links SET score = 0 WHERE location_a IN (SELECT id FROM locations WHERE "
+      "session_id = 2) AND location_b IN (SELECT id FROM locations WHERE session_id = 2)",
+      "UPDATE place_codes SET code = code WHERE location_id = " + a_place,
+      "UPDATE sessions SET source = 'elsewhere' WHERE id = 2",
+      "UPDATE sessions SET owner_role = 'cli_robot_b' WHERE id = 2",
+      "DELETE FROM sessions WHERE id = 2",
+      "DELETE FROM frames WHERE session_id = 2",
+      "UPDATE settings SET value = '1' WHERE session_id = 2",
+      "INSERT INTO vocabulary_imports (file, checksum, word_count, mode, imported_at) "
+      "VALUES ('x', 'y', 0, 'fixed', 'now')",
+      "DELETE FROM id_blocks",
+      "TRUNCATE placedb_meta",
+      "TRUNCATE word_refs",
+  };
+  const auto expectRefused = [&conn](const std::string& sql, const std::string& when) {
+    PGresult* r = PQexec(conn, sql.c_str());
+    EXPECT_EQ(PQresultStatus(r), PGRES_FATAL_ERROR) << when << ": " << sql;
+    const char* state = PQresultErrorField(r, PG_DIAG_SQLSTATE);
+    EXPECT_STREQ(state ? state : "", "42501")
+        << when << ": " << sql << ": " << PQresultErrorMessage(r);
+    PQclear(r);
+  };
+  for (const auto& sql : attacks) expectRefused(sql, "with the documented grants");
+  pgAdmin(uri, "GRANT ALL ON ALL TABLES IN SCHEMA public TO cli_robot_b");
+  for (const auto& sql : attacks) expectRefused(sql, "with every privilege");
+  PQfinish(conn);
+
+  // Nothing moved: the owner and every robot still use the map.
+  auto info = placedb({"info", uri, "--json"}, dir_);
+  ASSERT_EQ(info.exit_code, 0) << describe(info);
+  EXPECT_NE(info.out.find("\"schema_version\": " +
+                          std::to_string(storage::MapStore::currentSchemaVersion())),
+            std::string::npos)
+      << info.out;
+  auto check = placedb({"check", uri, "-q"}, dir_);
+  EXPECT_EQ(check.exit_code, 0) << describe(check);
+  auto again = placedb({"map", robot_uri["cli_robot_b"], list_b2, "-q"}, dir_);
+  EXPECT_EQ(again.exit_code, 0) << describe(again);
 }
 
 // File -> server -> file: the same info, and a further session mapped on each copy decides as

@@ -1,7 +1,7 @@
 // The parts of `placedb report` that need no map: base64, HTML escaping, the closures shown.
 #include <gtest/gtest.h>
 
-#include "report/base64.h"
+#include "base64.h"
 #include "report/report.h"
 
 namespace placedb::cli {

@@ -23,6 +23,7 @@ class Process {
       : output_(outputUnder(scratch, cwd)), child_(argv, output_) {}
 
   void signal(int sig) { child_.signal(sig); }
+  pid_t pid() const { return child_.pid(); }
 
   ProcessResult wait() {
     ProcessResult result;

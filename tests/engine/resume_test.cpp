@@ -133,12 +133,41 @@ TEST_P(ResumeTest, LocationsWithoutWordRowsResumeExactly) {
                        if (++closes == 1) expectWordRowsCopyWords(path);
                        sqlite3* db = nullptr;
                        ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
-                       EXPECT_EQ(sqlite3_exec(db, "DELETE FROM location_word_descriptors", nullptr,
-                                              nullptr, nullptr),
+                       // As locations made before schema 13 are: no row, and none recorded.
+                       EXPECT_EQ(sqlite3_exec(db,
+                                              "DELETE FROM location_word_descriptors; "
+                                              "UPDATE locations SET held = held & ~2",
+                                              nullptr, nullptr, nullptr),
                                  SQLITE_OK);
                        sqlite3_close(db);
                      });
   expectSame(straight, without);
+}
+
+// A map as schema 14 stored it (no record of what each location's rows hold, no sums on the WM
+// ages and the posterior), stopped every 20 frames: each reopen upgrades it, the migration fills
+// the records in from the rows, and the run decides exactly as a straight one.
+TEST_P(ResumeTest, SchemaFourteenMapGetsItsRowRecordsAndResumesExactly) {
+  Options options;
+  options.wm_max = GetParam();
+  auto straight = run("straight_v14_" + std::to_string(GetParam()), options, 0, false);
+  auto upgraded =
+      run("upgraded_v14_" + std::to_string(GetParam()), options, 20, false,
+          [](const std::string& path) {
+            sqlite3* db = nullptr;
+            ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+            for (const char* sql :
+                 {"ALTER TABLE locations DROP COLUMN held",
+                  "ALTER TABLE locations DROP COLUMN refs_digest",
+                  "ALTER TABLE locations DROP COLUMN checksum",
+                  "ALTER TABLE locations DROP COLUMN link_count",
+                  "ALTER TABLE sessions DROP COLUMN settings_digest",
+                  "ALTER TABLE wm_entries DROP COLUMN checksum",
+                  "ALTER TABLE filter_posterior DROP COLUMN checksum", "PRAGMA user_version = 14"})
+              EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sql;
+            sqlite3_close(db);
+          });
+  expectSame(straight, upgraded);
 }
 
 // Rewrites a closed map as schema 2 stored it: the kd-forest as a split log in engine_state
@@ -252,6 +281,12 @@ void downgradeToSchemaTwo(const std::string& path) {
   exec("DROP INDEX locations_by_created_frame");                       // schema 12
   exec("DROP TABLE location_word_descriptors");                        // schema 13
   exec("CREATE INDEX locations_by_tier ON locations (tier, weight)");  // schema 14
+  exec("ALTER TABLE locations DROP COLUMN held");                      // schema 15
+  exec("ALTER TABLE locations DROP COLUMN refs_digest");
+  exec("ALTER TABLE locations DROP COLUMN checksum");
+  exec("ALTER TABLE locations DROP COLUMN link_count");
+  exec("ALTER TABLE sessions DROP COLUMN settings_digest");
+  exec("ALTER TABLE filter_posterior DROP COLUMN checksum");
   exec("PRAGMA user_version = 2");
   exec("COMMIT");
   sqlite3_close(db);

@@ -240,6 +240,14 @@ def test_errors_carry_the_exit_code_category(tmp_path):
             m.process(np.zeros((240, 320), dtype=np.int64))
         with pytest.raises(placedb.InvalidArgument, match="channels"):
             m.process(np.zeros((240, 320, 2), dtype=np.uint8))
+        # Refused from its shape, before any copy: made contiguous this view of one byte would
+        # be 10 GB (a MemoryError before).
+        huge = np.lib.stride_tricks.as_strided(np.zeros(1, dtype=np.uint8),
+                                               shape=(100000, 100000), strides=(0, 0))
+        with pytest.raises(placedb.InvalidArgument, match="pixels a side"):
+            m.process(huge)
+        with pytest.raises(placedb.InvalidArgument, match="pixels a side"):
+            m.query(huge)
     with pytest.raises(placedb.InvalidArgument, match="closed"):
         m.process(np.zeros((240, 320), dtype=np.uint8))
 

@@ -193,7 +193,7 @@ TEST(RowChecksums, DamageInsideRowsIsRefusedNamingTheRow) {
       {"DELETE FROM kd_nodes WHERE tree = 0 AND node = 1", [](MapStore& s) { s.loadKdNodes(); },
        "kd_nodes holds 1 rows where the map recorded 2"},
       {"DELETE FROM engine_state WHERE key = 'storage.kd_nodes.rows'",
-       [](MapStore& s) { s.loadKdNodes(); }, "storage.kd_nodes.rows is missing"},
+       [](MapStore& s) { s.loadKdNodes(); }, "storage.kd_nodes.rows"},
   };
   int n = 0;
   for (const Case& c : cases) {

@@ -44,6 +44,8 @@ std::string exitCodeTable() {
          "  12  server refused the credentials (wrong password, unknown role)\n"
          "  13  server lost: `map` lost the map's server and it did not come back within\n"
          "      --server-wait; every committed frame is kept and the next `map` resumes\n"
+         "  14  live source stalled: the camera or stream sent nothing for 5 s; `map` closed\n"
+         "      the session cleanly with every frame it took\n"
          "Ctrl-C, SIGTERM or SIGHUP during `map` finishes the current frame, closes the map\n"
          "cleanly (resumable) and exits 0.\n";
 }

@@ -9,6 +9,9 @@ namespace placedb::cli {
 
 constexpr int kExitOk = 0;
 constexpr int kExitUsage = 2;  // CLI11 usage errors share the number of kInvalidArgument
+// `map` of a live source that stopped sending for its read timeout: the session is closed with
+// every frame kept, as at the source's end, but the end was not the stream's. Not an error.
+constexpr int kExitSourceStalled = 14;
 
 int exitCodeFor(ErrorCode code);
 

@@ -151,12 +151,13 @@ void FrameLogWriter::checkAppendable(const std::filesystem::path& path,
                                             : std::string("starts a new session")));
 }
 
-std::vector<std::int64_t> FrameLogWriter::cutBack(const std::filesystem::path& path,
-                                                  std::int64_t session, std::int64_t first_index) {
-  std::vector<std::int64_t> dropped;
-  if (path == kStandardOutput) return dropped;
+FrameLogWriter::CutBack FrameLogWriter::cutBack(const std::filesystem::path& path,
+                                                std::int64_t session, std::int64_t first_index) {
+  CutBack cut;
+  std::vector<std::int64_t>& dropped = cut.dropped;
+  if (path == kStandardOutput) return cut;
   std::ifstream in(path, std::ios::binary);
-  if (!in) return dropped;  // no log yet
+  if (!in) return cut;  // no log yet
   const std::string name = path.string();
   const std::vector<std::string>& names = columns();
   const auto at = [&names](const char* column) {
@@ -179,6 +180,7 @@ std::vector<std::int64_t> FrameLogWriter::cutBack(const std::filesystem::path& p
       if (ours && frame >= first_index) {
         dropped.push_back(frame);
       } else if (dropped.empty()) {
+        if (ours) cut.last_kept = frame;
         keep = next;
       } else {
         throw Error(ErrorCode::kInvalidArgument,
@@ -192,7 +194,7 @@ std::vector<std::int64_t> FrameLogWriter::cutBack(const std::filesystem::path& p
   in.close();
   if (!dropped.empty() && ::truncate(name.c_str(), keep) != 0)
     throwWriteError("cannot cut back log " + name, errno);
-  return dropped;
+  return cut;
 }
 
 FrameLogWriter::FrameLogWriter(const std::filesystem::path& path) : path_(path.string()) {
@@ -226,7 +228,10 @@ FrameLogWriter::~FrameLogWriter() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-void FrameLogWriter::write(const FrameResult& r) {
+namespace {
+
+// The row of `r`, in the order of FrameLogWriter::columns().
+std::vector<std::string> fieldsOf(const FrameResult& r) {
   std::string same_session, other_sessions;
   for (const auto& ref : r.hypothesis.frames) {
     if (ref.session_id == r.session_id)
@@ -269,6 +274,23 @@ void FrameLogWriter::write(const FrameResult& r) {
                                      millis(t.verification),
                                      std::to_string(r.hypothesis.candidates_checked),
                                      r.stamp_ns ? std::to_string(*r.stamp_ns) : std::string()};
+  return fields;
+}
+
+}  // namespace
+
+void FrameLogWriter::write(const FrameResult& r) { writeFields(fieldsOf(r)); }
+
+void FrameLogWriter::writeFromMap(const FrameResult& r) {
+  std::vector<std::string> fields = fieldsOf(r);
+  for (const char* unknown :
+       {"transferred", "retrieved", "inliers", "matches", "verification_ms", "candidates_checked"})
+    fields.at(static_cast<std::size_t>(std::find(columns().begin(), columns().end(), unknown) -
+                                       columns().begin())) = "";
+  writeFields(fields);
+}
+
+void FrameLogWriter::writeFields(const std::vector<std::string>& fields) {
   if (fields.size() != columns().size())
     throw Error(ErrorCode::kInternal, "frame log: fields and columns differ");
   std::string row;

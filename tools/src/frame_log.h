@@ -35,11 +35,15 @@ class FrameLogWriter {
   // one log never mixes two runs. Throws placedb::Error: kIo (cannot write), kInvalidArgument.
   static void checkAppendable(const std::filesystem::path& path,
                               std::optional<std::int64_t> resumed_session);
+  struct CutBack {
+    std::vector<std::int64_t> dropped;      // frames whose rows were cut off, in order
+    std::optional<std::int64_t> last_kept;  // the session's last row left (none: no row)
+  };
   // Rows of `session` from frame `first_index` on, which a resume maps again: the map lost their
   // commits (a power cut can take the write-ahead log with it) after the log had them. They are
-  // cut off so that each frame is in the log once. Returns the frames dropped, in order.
-  static std::vector<std::int64_t> cutBack(const std::filesystem::path& path, std::int64_t session,
-                                           std::int64_t first_index);
+  // cut off so that each frame is in the log once. Nothing to cut in standard output.
+  static CutBack cutBack(const std::filesystem::path& path, std::int64_t session,
+                         std::int64_t first_index);
   ~FrameLogWriter();
   FrameLogWriter(const FrameLogWriter&) = delete;
   FrameLogWriter& operator=(const FrameLogWriter&) = delete;
@@ -47,10 +51,16 @@ class FrameLogWriter {
   // One write() per row, so a killed run keeps its rows. A row the disk has no room for is
   // cut back off (kDiskFull), so the log never holds a partial row.
   void write(const FrameResult& result);
+  // A row rebuilt from the map (log_recovery.h) for a frame the map holds and the log lacks: the
+  // columns the map does not keep (transferred, retrieved, inliers, matches, verification_ms,
+  // candidates_checked) are left empty.
+  void writeFromMap(const FrameResult& result);
 
   static const std::vector<std::string>& columns();
 
  private:
+  void writeFields(const std::vector<std::string>& fields);
+
   int fd_ = -1;
   std::string path_;
   off_t size_ = 0;  // bytes of whole rows

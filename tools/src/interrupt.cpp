@@ -6,10 +6,13 @@
 namespace placedb::cli {
 namespace {
 
-std::atomic<bool> g_interrupted{false};
-static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
+std::atomic<int> g_signal{0};
+static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs a lock-free flag");
 
-extern "C" void onInterrupt(int) { g_interrupted.store(true); }
+extern "C" void onInterrupt(int signal) {
+  int none = 0;
+  g_signal.compare_exchange_strong(none, signal);  // the first one names the stop
+}
 
 }  // namespace
 
@@ -23,6 +26,19 @@ void installInterruptHandlers() {
   sigaction(SIGHUP, &action, nullptr);  // a closed terminal or ssh session
 }
 
-bool interruptRequested() { return g_interrupted.load(); }
+bool interruptRequested() { return g_signal.load() != 0; }
+
+const char* interruptSignalName() {
+  switch (g_signal.load()) {
+    case SIGINT:
+      return "SIGINT";
+    case SIGTERM:
+      return "SIGTERM";
+    case SIGHUP:
+      return "SIGHUP";
+    default:
+      return "a signal";
+  }
+}
 
 }  // namespace placedb::cli

@@ -6,5 +6,7 @@ namespace placedb::cli {
 
 void installInterruptHandlers();
 bool interruptRequested();
+// "SIGINT", "SIGTERM" or "SIGHUP": the first of them that came.
+const char* interruptSignalName();
 
 }  // namespace placedb::cli

@@ -13,6 +13,12 @@ namespace placedb::cli {
 // reads it when the URI gives none). Files pass unchanged.
 CLI::Validator mapArgument();
 
+// Overwrites in place, with one 'x' a character, every password that a server URI among the
+// process's arguments holds (user:password@, password=...), as psql and mysql do: `ps` and
+// /proc/PID/cmdline then never show it. main() calls it first, with its own argv, after copying
+// the arguments it parses. An argument may also hold a URI after '=' (--opt=postgresql://...).
+void hidePasswordsInArguments(int argc, char** argv);
+
 // kIo "map M does not exist" for a missing file; nothing for a URI (opening it says whether the
 // database holds a map).
 void requireExistingMap(const std::string& map);

@@ -1,13 +1,8 @@
 #include "text_file.h"
 
 #include <fmt/format.h>
-#include <sys/stat.h>
-#include <unistd.h>
-#include <cctype>
-#include <cerrno>
-#include <cstdio>
-#include <cstring>
 
+#include <cctype>
 #include <fstream>
 #include <iterator>
 
@@ -48,28 +43,6 @@ std::string readTextFile(const std::filesystem::path& path, const std::string& w
                 fmt::format("cannot read {} {}: {}", what, path.string(), e.what()));
   }
   return withoutByteOrderMark(std::move(content));
-}
-
-void writeTextFile(const std::filesystem::path& target, const std::string& text) {
-  namespace fs = std::filesystem;
-  struct stat st {};
-  const bool special = ::stat(target.c_str(), &st) == 0 && !S_ISREG(st.st_mode);
-  const fs::path partial =
-      special ? target : fs::path(target.string() + fmt::format(".partial-{}", ::getpid()));
-  auto fail = [&](int error) {
-    std::error_code ec;
-    if (!special) fs::remove(partial, ec);
-    const bool full = error == ENOSPC || error == EFBIG || error == EDQUOT;
-    throw Error(full ? ErrorCode::kDiskFull : ErrorCode::kIo,
-                fmt::format("cannot write {}: {}", target.string(), std::strerror(error)));
-  };
-  std::FILE* file = std::fopen(partial.c_str(), "wb");
-  if (!file) fail(errno);
-  const bool written =
-      std::fwrite(text.data(), 1, text.size(), file) == text.size() && std::fflush(file) == 0;
-  const int error = errno;
-  if (std::fclose(file) != 0 || !written) fail(written ? errno : error);
-  if (!special && std::rename(partial.c_str(), target.c_str()) != 0) fail(errno);
 }
 
 }  // namespace placedb::cli

@@ -38,6 +38,7 @@ void EngineCounters::save(storage::MapStore& store) const {
                       {"evidence_log10_alternatives", closure_evidence.log10_alternatives},
                       {"evidence_frames", closure_evidence.frames},
                       {"next_wm_age", next_wm_age}};
+  if (tiers_digest != 0) j["tiers_digest"] = tiers_digest;
   // Only where a server map's writer set them: a file's counters stay as they were.
   const std::pair<const char*, std::int64_t> fleet[] = {{"frame_block_end", frame_block_end},
                                                         {"location_block_end", location_block_end},
@@ -82,6 +83,8 @@ bool EngineCounters::load(const storage::MapStore& store) {
     location_block_end = j.value("location_block_end", std::int64_t{0});
     word_block_end = j.value("word_block_end", std::int64_t{0});
     frame_clock_shift = j.value("frame_clock_shift", std::int64_t{0});
+    // Absent from maps made before schema 15's checks.
+    tiers_digest = j.value("tiers_digest", std::int64_t{0});
   } catch (const nlohmann::json::exception& e) {
     throw Error(ErrorCode::kMapRefused, fmt::format("{}: engine state '{}' is damaged: {}",
                                                     store.path(), kCountersKey, e.what()));

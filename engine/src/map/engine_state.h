@@ -33,6 +33,9 @@ struct EngineCounters {
   // frames by their clock, frame id - frame_clock_shift, which a jump to a new block leaves
   // continuous. 0 for a lone writer, whose blocks follow each other.
   std::int64_t frame_clock_shift = 0;
+  // Which locations were in STM and WM after the last frame (map_structure.h's tiersDigest), so
+  // that a tier changed by hand is found when the map opens; 0 on maps made before.
+  std::int64_t tiers_digest = 0;
 
   void save(storage::MapStore& store) const;
   // False when the map holds no engine state yet (a new map).

@@ -19,6 +19,7 @@
 #include <algorithm>
 
 #include "map/map_impl.h"
+#include "map/map_structure.h"
 #include "placedb/version.h"
 
 namespace placedb {
@@ -97,6 +98,7 @@ void MapImpl::startSessionMemory(std::int64_t session_id) {
   }
   counters_.last_location = 0;
   counters_.last_session = session_id;
+  counters_.tiers_digest = tiersDigest({tiers_->stm().begin(), tiers_->stm().end()}, tiers_->wm());
 }
 
 SessionInfo MapImpl::beginSideSession(const std::string& source, const std::string& source_digest) {

@@ -9,6 +9,7 @@
 #include "features/cpu_support.h"
 #include "features/feature_options.h"
 #include "map/map_impl.h"
+#include "map/map_structure.h"
 #include "map/option_mapping.h"
 #include "placedb/version.h"
 
@@ -36,7 +37,8 @@ std::unique_ptr<Map> Map::open(const std::string& path, const Options& options, 
 
 MapImpl::MapImpl(const std::string& path, const Options& options, Mode mode) : mode_(mode) {
   storage::OpenOptions open_options;
-  open_options.side_writer = true;  // a server map may have other writers (map_fleet.cpp)
+  open_options.side_writer = true;       // a server map may have other writers (map_fleet.cpp)
+  open_options.check_references = true;  // a read-write open looks them up with its page check
   store_ = storage::openMapStore(
       path,
       mode == Mode::kLocalisation ? storage::OpenMode::kReadOnly : storage::OpenMode::kReadWrite,
@@ -81,8 +83,14 @@ void MapImpl::configure(const Options& options) {
 
 void MapImpl::restoreFromStore() {
   const auto snapshot_of_file = store_->readSnapshot();
+  // Every location holds its rows before any is read (storage/src/location_rows.h).
+  store_->checkStoredRows();
   counters_ = EngineCounters();
-  counters_.load(*store_);
+  if (!counters_.load(*store_) && store_->lastFrame())
+    throw Error(ErrorCode::kMapRefused,
+                fmt::format("{} damaged: engine_state row '{}' is missing, and the map holds "
+                            "frames; nothing was written",
+                            store_->path(), kCountersKey));
   // Before the locations are listed: a place stored in between is found again, not missed.
   newest_known_.clear();
   if (store_->sharedByWriters()) newest_known_ = store_->newestLocations();
@@ -91,6 +99,8 @@ void MapImpl::restoreFromStore() {
   MemorySnapshot snapshot;
   snapshot.next_age = counters_.next_wm_age;
   const auto ages = store_->wmAges();
+  std::int64_t last_wm_age = 0;
+  for (const auto& [location, age] : ages) last_wm_age = std::max(last_wm_age, age);
   std::vector<std::int64_t> live;  // STM and WM
   for (Tier tier : {Tier::kStm, Tier::kWm, Tier::kLtm}) {
     for (const auto& row : store_->locationsInTier(tier)) {
@@ -111,7 +121,16 @@ void MapImpl::restoreFromStore() {
   std::sort(snapshot.locations.begin(), snapshot.locations.end(),
             [](const auto& a, const auto& b) { return a.id < b.id; });
   std::sort(live.begin(), live.end());
-  tiers_->restore(snapshot);
+  try {
+    tiers_->restore(snapshot);
+  } catch (const Error& e) {
+    // The snapshot came from the file: if it does not fit, the file is damaged.
+    if (e.code() != ErrorCode::kInvalidArgument) throw;
+    throw Error(ErrorCode::kMapRefused,
+                fmt::format("{} damaged: engine_state row '{}' and the locations and wm_entries "
+                            "rows disagree ({}); nothing was written",
+                            store_->path(), kCountersKey, e.what()));
+  }
 
   // Signatures of STM and WM, and the words they reference.
   std::vector<std::int64_t> word_ids;
@@ -127,6 +146,8 @@ void MapImpl::restoreFromStore() {
   std::sort(word_ids.begin(), word_ids.end());
   word_ids.erase(std::unique(word_ids.begin(), word_ids.end()), word_ids.end());
   auto state = vocabulary_state_.load(*store_);
+  const std::optional<std::int64_t> next_word_id =
+      state ? std::optional(state->next_word_id) : std::nullopt;
   if (state && state->kd_trees != options_.kd_trees)
     throw Error(ErrorCode::kInvalidArgument,
                 fmt::format("{} indexes its words with kd_trees={}; kd_trees={} is refused "
@@ -175,7 +196,13 @@ void MapImpl::restoreFromStore() {
   places_.setThreads(resolveThreadCount(options_.threads));
   place_neighbourhood_.reset();  // of the codes just cleared
   ltm_words_.reset();            // their words went with the vocabulary configure() replaced
-  if (auto centres = store_->getState(kPlaceCoderKey)) {
+  auto centres = store_->getState(kPlaceCoderKey);
+  if (!centres && !store_->placeCodes().empty())
+    throw Error(ErrorCode::kMapRefused,
+                fmt::format("{} damaged: engine_state row '{}' is missing, and the map holds "
+                            "place codes made with it; nothing was written",
+                            store_->path(), kPlaceCoderKey));
+  if (centres) {
     try {
       coder_ = PlaceCoder::fromBytes(*centres, extractor_->dim());
       for (const auto& record : store_->placeCodes()) places_.add(record.location_id, record.code);
@@ -193,6 +220,9 @@ void MapImpl::restoreFromStore() {
                   fmt::format("{}: filter_posterior row of location {} is damaged: posterior {} "
                               "is not a probability",
                               store_->path(), location, p));
+  // Before anything is written: the rows agree with each other (map/map_structure.h).
+  checkStoredMemory(*store_,
+                    {counters_, snapshot, last_wm_age, filter_state.posterior, next_word_id});
   filter_state.previous_score = counters_.previous_score;
   filter_->restore(filter_state);
 }

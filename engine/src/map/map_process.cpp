@@ -8,6 +8,7 @@
 
 #include "features/image_conversion.h"
 #include "map/map_impl.h"
+#include "map/map_structure.h"
 #include "map/option_mapping.h"
 
 namespace placedb {
@@ -570,6 +571,8 @@ void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_pa
     if (w.frame.outcome != storage::FrameOutcome::kBad)
       store_->putPosterior(filter_->state().posterior);
     counters_.next_wm_age = tiers_->nextAge();
+    counters_.tiers_digest =
+        tiersDigest({tiers_->stm().begin(), tiers_->stm().end()}, tiers_->wm());
     counters_.save(*store_);
     vocabulary_state_.save(*store_, *vocabulary_);
     // The frame's row goes last (foreign keys are checked at commit) so that its storage_ms

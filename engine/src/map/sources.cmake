@@ -5,6 +5,7 @@ set(_placedb_map_sources
   ${CMAKE_CURRENT_LIST_DIR}/map_fleet.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_import.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_open.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/map_structure.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_process.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_query.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_verify.cpp

@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <string>
 
+#include "placedb/storage/records.h"
+
 namespace placedb {
 
 // Signature of the features the map was made with ("surf-64"): a map never mixes extractors.
@@ -28,9 +30,10 @@ inline std::string vocabularySplitsKey(std::size_t chunk) {
   return key;
 }
 
-// "keypoint_descriptors/<id>": a location's own keypoint descriptors (see encodeDescriptors).
+// "keypoint_descriptors/<id>": a location's own keypoint descriptors (see encodeDescriptors); one
+// of the rows a location holds, named by storage.
 inline std::string keypointDescriptorsKey(std::int64_t location_id) {
-  return "keypoint_descriptors/" + std::to_string(location_id);
+  return storage::locationKeypointsKey(location_id);
 }
 
 }  // namespace placedb

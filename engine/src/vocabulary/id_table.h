@@ -49,8 +49,11 @@ class IdTable {
   std::vector<std::int64_t> ids() const {
     std::vector<std::int64_t> out;
     out.reserve(size_);
-    for (const auto& [page_index, page] : pages_)
-      page.forEach([&](std::uint16_t offset) { out.push_back(page_index * kPageSize + offset); });
+    // Not a structured binding: C++17 lambdas cannot capture one (clang refuses; the fuzz build).
+    for (const auto& entry : pages_) {
+      const auto first = entry.first * kPageSize;
+      entry.second.forEach([&](std::uint16_t offset) { out.push_back(first + offset); });
+    }
     return out;
   }
 

@@ -80,6 +80,23 @@ class HeaderParser {
                   (error != 0 ? std::strerror(error) : "write failed"));
 }
 
+// Opens `path`, lets `write` fill it and reports a failed open, write, flush or close.
+template <typename Write>
+void writeToPath(const std::filesystem::path& path, const char* what, Write write) {
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (!file) writeFailed(path, what, errno);
+  try {
+    write(file);
+  } catch (...) {
+    std::fclose(file);
+    throw;
+  }
+  int error = std::ferror(file) ? (errno ? errno : EIO) : 0;
+  if (std::fflush(file) != 0 && error == 0) error = errno;
+  if (std::fclose(file) != 0 && error == 0) error = errno;
+  if (error != 0) writeFailed(path, what, error);
+}
+
 // Words as a reader may hand them on: ids unique and >= 0, every value finite. A file can pass
 // its checksums and still break these (it was written by something else).
 void checkWords(const std::filesystem::path& path, const VocabularyData& data) {
@@ -184,7 +201,7 @@ VocabularyData snapshotOf(const Vocabulary& vocabulary) {
   return data;
 }
 
-void writeVocabularyFile(const std::filesystem::path& path, const VocabularyData& data) {
+void writeVocabularyFile(std::FILE* out, const VocabularyData& data) {
   checkData(data);
   const std::string header = headerBytes(data);
   const std::string payload = payloadBytes(data);
@@ -202,14 +219,13 @@ void writeVocabularyFile(const std::filesystem::path& path, const VocabularyData
     ar << payload_length << payload_crc;
     ar.save_binary(payload.data(), payload.size());
   }
-  std::FILE* file = std::fopen(path.c_str(), "wb");
-  if (!file) writeFailed(path, "cannot write vocabulary file", errno);
   const std::string content = bytes.str();
-  int error = 0;
-  if (std::fwrite(content.data(), 1, content.size(), file) != content.size()) error = errno;
-  if (std::fflush(file) != 0 && error == 0) error = errno;
-  if (std::fclose(file) != 0 && error == 0) error = errno;
-  if (error != 0) writeFailed(path, "cannot write vocabulary file", error);
+  std::fwrite(content.data(), 1, content.size(), out);
+}
+
+void writeVocabularyFile(const std::filesystem::path& path, const VocabularyData& data) {
+  writeToPath(path, "cannot write vocabulary file",
+              [&data](std::FILE* out) { writeVocabularyFile(out, data); });
 }
 
 VocabularyData readVocabularyFile(const std::filesystem::path& path,
@@ -311,33 +327,38 @@ VocabularyData readVocabularyFile(const std::filesystem::path& path,
   }
 }
 
-void writeVocabularyText(const std::filesystem::path& path, const VocabularyData& data) {
-  checkData(data);
-  // What RTAB-Map's loader accepts: a dimension of at most 1000 and ids its int holds.
+// What RTAB-Map's loader accepts: a dimension of at most 1000 and ids its int holds.
+static void checkRtabmapFits(const VocabularyData& data, const std::string& name) {
   if (data.dim > kRtabmapMaxDimension)
     throw Error(ErrorCode::kInvalidArgument,
-                "cannot write " + path.string() + " as an RTAB-Map dictionary: dimension " +
+                "cannot write " + name + " as an RTAB-Map dictionary: dimension " +
                     std::to_string(data.dim) + " (RTAB-Map reads at most " +
                     std::to_string(kRtabmapMaxDimension) + ")");
   for (const std::int64_t id : data.ids)
     if (id < 0 || id + kRtabmapIdStart > std::numeric_limits<std::int32_t>::max())
       throw Error(ErrorCode::kInvalidArgument,
-                  "cannot write " + path.string() + " as an RTAB-Map dictionary: word id " +
+                  "cannot write " + name + " as an RTAB-Map dictionary: word id " +
                       std::to_string(id) + " does not fit RTAB-Map's int ids");
-  std::FILE* file = std::fopen(path.c_str(), "w");
-  if (!file) writeFailed(path, "cannot write vocabulary text", errno);
-  int error = 0;
+}
+
+void writeVocabularyText(std::FILE* out, const VocabularyData& data) {
+  checkData(data);
+  checkRtabmapFits(data, "the output");
   // RTAB-Map takes the descriptor dimension from the number that ends its header line.
-  if (std::fprintf(file, "%s%d\n", kRtabmapHeader, data.dim) < 0) error = errno ? errno : EIO;
-  for (std::size_t i = 0; i < data.ids.size() && error == 0; ++i) {
-    bool ok = std::fprintf(file, "%lld", static_cast<long long>(data.ids[i] + kRtabmapIdStart)) > 0;
+  std::fprintf(out, "%s%d\n", kRtabmapHeader, data.dim);
+  for (std::size_t i = 0; i < data.ids.size() && !std::ferror(out); ++i) {
+    std::fprintf(out, "%lld", static_cast<long long>(data.ids[i] + kRtabmapIdStart));
     const float* row = data.descriptors.ptr<float>(int(i));
-    for (int d = 0; d < data.dim && ok; ++d) ok = std::fprintf(file, " %.9g", row[d]) > 0;
-    ok = ok && std::fputc('\n', file) != EOF;
-    if (!ok) error = errno;
+    for (int d = 0; d < data.dim; ++d) std::fprintf(out, " %.9g", row[d]);
+    std::fputc('\n', out);
   }
-  if (std::fclose(file) != 0 && error == 0) error = errno;
-  if (error != 0) writeFailed(path, "cannot write vocabulary text", error);
+}
+
+void writeVocabularyText(const std::filesystem::path& path, const VocabularyData& data) {
+  checkData(data);
+  checkRtabmapFits(data, path.string());
+  writeToPath(path, "cannot write vocabulary text",
+              [&data](std::FILE* out) { writeVocabularyText(out, data); });
 }
 
 VocabularyData readVocabularyText(const std::filesystem::path& path, int expected_dim) {

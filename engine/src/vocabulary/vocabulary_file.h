@@ -24,6 +24,7 @@
 // back as -1). The reader also takes files without the header line, the dimension then being
 // the first line's.
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -61,13 +62,16 @@ struct VocabularyExpectation {
 VocabularyData snapshotOf(const Vocabulary& vocabulary);
 
 // Throws placedb::Error(kIo) when the file cannot be written, kInvalidArgument on inconsistent
-// data.
+// data. The stream forms write to `out` and leave its errors on its error flag (the command
+// line's one writer, tools/src/whole_file.h, checks them).
 void writeVocabularyFile(const std::filesystem::path& path, const VocabularyData& data);
+void writeVocabularyFile(std::FILE* out, const VocabularyData& data);
 // Throws placedb::Error(kVocabularyRefused) naming the file and the reason, kIo if unreadable.
 VocabularyData readVocabularyFile(const std::filesystem::path& path,
                                   const VocabularyExpectation& expect = {});
 
 void writeVocabularyText(const std::filesystem::path& path, const VocabularyData& data);
+void writeVocabularyText(std::FILE* out, const VocabularyData& data);
 // expected_dim 0: taken from the header (or the first word). Throws kVocabularyRefused on a
 // malformed line or a dimension that differs from expected_dim or the header.
 VocabularyData readVocabularyText(const std::filesystem::path& path, int expected_dim = 0);

@@ -4,9 +4,11 @@
 // initdb --data-checksums, or pg_amcheck), so there is no "pages" or "foreign keys" stage.
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <map>
 
 #include "backends.h"
+#include "placedb/storage/map_check.h"
 #include "placedb/storage/migrations.h"
 #include "postgres/pg_connection.h"
 #include "postgres/pg_map_store.h"
@@ -68,7 +70,8 @@ class PgChecker {
              float value;
              std::memcpy(&value, data + at, sizeof value);
              if (!std::isfinite(value))
-               return find("words", std::to_string(id), "holds a value that is not finite");
+               return find("words", std::to_string(id),
+                           "holds a value that is not a finite number");
            }
          });
     rows("place_codes", "SELECT location_id, code, checksum FROM place_codes",
@@ -193,6 +196,28 @@ CheckReport checkPgMap(const std::string& uri, const CheckOptions& options) {
     checker.checksums();
     checker.sideSessions();
     checker.values();
+    // What every location and session must hold (schema 15), and every location's references
+    // against their digest: the store's own checks, the first damaged row of each.
+    for (const auto& stage : std::vector<std::function<void()>>{
+             [&store] { store.checkStoredRows(); },
+             [&store, &db] {
+               const auto ids = db.run("SELECT id FROM locations ORDER BY id");
+               std::vector<std::int64_t> chunk;
+               for (int i = 0; i < ids.rows(); ++i) {
+                 chunk.push_back(ids.integer(i, 0));
+                 if (chunk.size() == 1024 || i + 1 == ids.rows()) {
+                   store.loadWordRefs(chunk);
+                   chunk.clear();
+                 }
+               }
+             }}) {
+      try {
+        stage();
+      } catch (const StorageError& e) {
+        if (e.code() != ErrorCode::kMapRefused) throw;
+        checker.find("structure", "", e.what());
+      }
+    }
     if (report.ok() && options.last_check) {
       if (options.progress) options.progress({"engine state", 0, 0});
       const std::string problem = options.last_check();

@@ -1,7 +1,10 @@
 // PgMapStore: opening (identity, migrations, the writer's lock), sessions, frames and locations.
 #include "postgres/pg_map_store.h"
 
+#include <map>
+
 #include "backends.h"
+#include "location_rows.h"
 #include "placedb/storage/migrations.h"
 #include "row_checksums.h"
 
@@ -144,6 +147,7 @@ void PgMapStore::migrate() {
     for (const Migration& m : scripts) {
       if (m.version <= found) continue;
       db_->exec(m.sql);
+      if (m.version == detail::kLocationRowsSchemaVersion && found > 0) fillLocationRows();
       db_->run(
           "INSERT INTO placedb_meta (key, value) VALUES ('schema_version', $1), "
           "('application_id', '1347175490') ON CONFLICT (key) DO UPDATE SET value = "
@@ -165,6 +169,96 @@ void PgMapStore::migrate() {
   } catch (...) {
     db_->rollbackQuietly();
     throw;
+  }
+}
+
+void PgMapStore::fillLocationRows() {
+  {
+    const auto sessions = db_->run("SELECT id, source FROM sessions");
+    std::vector<std::int64_t> ids, digests;
+    for (int i = 0; i < sessions.rows(); ++i) {
+      ids.push_back(sessions.integer(i, 0));
+      std::map<std::string, std::string> settings;
+      const auto r = db_->run("SELECT key, value FROM settings WHERE session_id = $1",
+                              detail::PgParams().add(ids.back()));
+      for (int k = 0; k < r.rows(); ++k) settings[r.text(k, 0)] = r.text(k, 1);
+      digests.push_back(detail::settingsDigest(ids.back(), sessions.text(i, 1), settings));
+    }
+    db_->run(
+        "UPDATE sessions s SET settings_digest = u.d FROM unnest($1::int8[], $2::int8[]) AS "
+        "u(id, d) WHERE s.id = u.id",
+        detail::PgParams().addArray(ids).addArray(digests));
+  }
+  for (const char* table : {"wm_entries", "filter_posterior"}) {
+    const bool ages = std::string(table) == "wm_entries";
+    const auto r = db_->run(
+        (std::string("SELECT location_id, ") + (ages ? "wm_age" : "probability") + " FROM " + table)
+            .c_str());
+    std::vector<std::int64_t> ids, sums;
+    for (int i = 0; i < r.rows(); ++i) {
+      ids.push_back(r.integer(i, 0));
+      sums.push_back(ages ? detail::wmEntryChecksum(ids.back(), r.integer(i, 1))
+                          : detail::posteriorChecksum(ids.back(), r.real(i, 1)));
+    }
+    db_->run((std::string("UPDATE ") + table +
+              " t SET checksum = u.s FROM unnest($1::int8[], $2::int8[]) AS u(id, s) "
+              "WHERE t.location_id = u.id")
+                 .c_str(),
+             detail::PgParams().addArray(ids).addArray(sums));
+  }
+  {
+    const auto r = db_->run("SELECT id, session_id, weight, created_frame FROM locations");
+    std::vector<std::int64_t> ids, sums;
+    for (int i = 0; i < r.rows(); ++i) {
+      ids.push_back(r.integer(i, 0));
+      sums.push_back(detail::locationChecksum(ids.back(), r.integer(i, 1), r.integer(i, 2),
+                                              r.optionalInteger(i, 3)));
+    }
+    db_->run(
+        "UPDATE locations l SET checksum = u.s FROM unnest($1::int8[], $2::int8[]) AS u(id, s) "
+        "WHERE l.id = u.id",
+        detail::PgParams().addArray(ids).addArray(sums));
+  }
+  db_->run(
+      "UPDATE locations l SET link_count = (SELECT count(*) FROM links k WHERE k.location_a = "
+      "l.id) + (SELECT count(*) FROM links k WHERE k.location_b = l.id)");
+  db_->run(
+      "UPDATE locations l SET held = "
+      "(EXISTS (SELECT 1 FROM place_codes p WHERE p.location_id = l.id))::int * 1 + "
+      "(EXISTS (SELECT 1 FROM location_word_descriptors d WHERE d.location_id = l.id))::int * 2 + "
+      "(EXISTS (SELECT 1 FROM engine_state s WHERE s.key = $1 || l.id))::int * 4 + "
+      "(EXISTS (SELECT 1 FROM wm_entries w WHERE w.location_id = l.id))::int * 8",
+      detail::PgParams().add(std::string(kLocationKeypointsKeyPrefix)));
+  // Digests a range of locations at a time: the references of a large map do not fit in one
+  // result.
+  constexpr std::int64_t kRange = 4096;
+  const std::int64_t last = db_->run("SELECT coalesce(max(id), 0) FROM locations").integer(0, 0);
+  for (std::int64_t first = 0; first <= last; first += kRange) {
+    const std::int64_t end = first + kRange;
+    const auto locations = db_->run("SELECT id FROM locations WHERE id >= $1 AND id < $2",
+                                    detail::PgParams().add(first).add(end));
+    const auto refs = db_->run(
+        "SELECT location_id, word_id, x, y, size, angle, response FROM word_refs "
+        "WHERE location_id >= $1 AND location_id < $2 ORDER BY location_id, ordinal",
+        detail::PgParams().add(first).add(end));
+    std::map<std::int64_t, detail::RefsDigest> digests;
+    for (int i = 0; i < locations.rows(); ++i)
+      digests.emplace(locations.integer(i, 0), detail::RefsDigest(locations.integer(i, 0)));
+    for (int i = 0; i < refs.rows(); ++i) {
+      const auto it = digests.find(refs.integer(i, 0));
+      if (it != digests.end())
+        it->second.add(refs.integer(i, 1), refs.real(i, 2), refs.real(i, 3), refs.real(i, 4),
+                       refs.real(i, 5), refs.real(i, 6));
+    }
+    std::vector<std::int64_t> ids, values;
+    for (const auto& [id, digest] : digests) {
+      ids.push_back(id);
+      values.push_back(digest.value());
+    }
+    db_->run(
+        "UPDATE locations l SET refs_digest = u.d FROM unnest($1::int8[], $2::int8[]) AS u(id, d) "
+        "WHERE l.id = u.id",
+        detail::PgParams().addArray(ids).addArray(values));
   }
 }
 
@@ -222,6 +316,9 @@ std::int64_t PgMapStore::beginSession(const std::string& source,
         "$3::text[]) AS t(k, v)",
         detail::PgParams().add(id).addArray(keys).addArray(values));
   }
+  db_->send(
+      "UPDATE sessions SET settings_digest = $2 WHERE id = $1",
+      detail::PgParams().add(id).add(std::int64_t{detail::settingsDigest(id, source, settings)}));
   scope.commit();
   return id;
 }
@@ -273,6 +370,14 @@ std::map<std::string, std::string> PgMapStore::settings(std::int64_t session_id)
                           detail::PgParams().add(session_id));
   std::map<std::string, std::string> out;
   for (int i = 0; i < r.rows(); ++i) out[r.text(i, 0)] = r.text(i, 1);
+  // A setting deleted would resume the session with its default, one added with another value.
+  const auto digest = db_->run("SELECT source, settings_digest FROM sessions WHERE id = $1",
+                               detail::PgParams().add(session_id));
+  if (digest.rows() > 0 && digest.optionalInteger(0, 1) != std::int64_t{detail::settingsDigest(
+                                                               session_id, digest.text(0, 0), out)})
+    detail::refuseDamagedRow(label_, "settings", "of session " + std::to_string(session_id),
+                             "do not match the session's settings_digest (a setting was deleted, "
+                             "added or changed, or the session's source)");
   return out;
 }
 
@@ -359,24 +464,42 @@ std::optional<FrameRecord> PgMapStore::lastFrame() const {
 void PgMapStore::insertLocation(const LocationRecord& l) {
   if (side_session_) return sideInsertLocation(l);
   auto scope = writeScope();
+  // It holds no other row yet: each is marked as it is written (location_rows.h).
+  fresh_locations_.insert(l.id);
   db_->send(
-      "INSERT INTO locations (id, session_id, weight, tier, created_frame) "
-      "VALUES ($1, $2, $3, $4, $5)",
+      "INSERT INTO locations (id, session_id, weight, tier, created_frame, held, refs_digest, "
+      "checksum, link_count) VALUES ($1, $2, $3, $4, $5, 0, $6, $7, 0)",
       detail::PgParams()
           .add(l.id)
           .add(l.session_id)
           .add(l.weight)
           .add(std::int64_t{static_cast<int>(l.tier)})
-          .add(l.created_frame));
+          .add(l.created_frame)
+          .add(std::int64_t{detail::refsDigest(l.id, {})})
+          .add(std::int64_t{
+              detail::locationChecksum(l.id, l.session_id, l.weight, l.created_frame)}));
   scope.commit();
+}
+
+void PgMapStore::markHeld(std::int64_t location_id, std::int64_t bit, bool held) {
+  // Unchanged rows are not written again (a location brought back keeps its WM age bit).
+  db_->send(held ? "UPDATE locations SET held = held | $2 WHERE id = $1 AND (held & $2) = 0"
+                 : "UPDATE locations SET held = held & ~$2 WHERE id = $1 AND (held & $2) <> 0",
+            detail::PgParams().add(location_id).add(bit));
 }
 
 void PgMapStore::updateWeight(std::int64_t location_id, std::int64_t weight) {
   auto scope = writeScope();
-  const auto r = db_->run("UPDATE locations SET weight = $2 WHERE id = $1",
-                          detail::PgParams().add(location_id).add(weight));
-  if (r.changed() != 1)
+  const auto r =
+      db_->run("UPDATE locations SET weight = $2 WHERE id = $1 RETURNING session_id, created_frame",
+               detail::PgParams().add(location_id).add(weight));
+  if (r.rows() != 1)
     throw StorageError(ErrorCode::kInvalidArgument, "no location " + std::to_string(location_id));
+  db_->send("UPDATE locations SET checksum = $2 WHERE id = $1",
+            detail::PgParams()
+                .add(location_id)
+                .add(std::int64_t{detail::locationChecksum(location_id, r.integer(0, 0), weight,
+                                                           r.optionalInteger(0, 1))}));
   scope.commit();
 }
 
@@ -392,9 +515,14 @@ void PgMapStore::setTier(const std::vector<std::int64_t>& location_ids, Tier tie
 void PgMapStore::deleteLocation(std::int64_t location_id) {
   auto scope = writeScope();
   db_->send(
-      "WITH p AS (DELETE FROM filter_posterior WHERE location_id = $1) "
+      "WITH p AS (DELETE FROM filter_posterior WHERE location_id = $1), "
+      "k AS (DELETE FROM engine_state WHERE key = $2), "
+      "n AS (UPDATE locations o SET link_count = o.link_count - (SELECT count(*) FROM links k "
+      "WHERE (k.location_a = $1 AND k.location_b = o.id) OR (k.location_b = $1 AND "
+      "k.location_a = o.id)) WHERE o.id IN (SELECT location_b FROM links WHERE location_a = $1 "
+      "UNION SELECT location_a FROM links WHERE location_b = $1)) "
       "DELETE FROM locations WHERE id = $1",
-      detail::PgParams().add(location_id));
+      detail::PgParams().add(location_id).add(locationKeypointsKey(location_id)));
   scope.commit();
 }
 

@@ -158,6 +158,7 @@ class PgMapStore final : public MapStore {
   std::vector<PlaceCodeRecord> placeCodes() const override;  // by location id
   std::optional<std::vector<std::int8_t>> placeCode(std::int64_t location_id) const override;
   void setWmAges(const std::vector<std::pair<std::int64_t, std::int64_t>>& ages) override;
+  void checkStoredRows() const override;
   // Every location's age; its id where none was stored (maps made before schema 4).
   std::map<std::int64_t, std::int64_t> wmAges() const override;
 
@@ -188,6 +189,15 @@ class PgMapStore final : public MapStore {
 
  private:
   void requireWritable() const;
+  // Sets (or clears) one of a location's held bits (location_rows.h), pipelined.
+  void markHeld(std::int64_t location_id, std::int64_t bit, bool held);
+  // Refuses the map unless every location of `refs` (rows by location) matches its refs_digest.
+  void requireRefsDigests(const std::map<std::int64_t, std::vector<WordRef>>& refs) const;
+  // Fills held, refs_digest and the new sums of a map upgraded to schema 15.
+  void fillLocationRows();
+  // Locations this store inserted and wrote no reference of yet: their first references need no
+  // read of earlier ones for the digest.
+  std::set<std::int64_t> fresh_locations_;
   detail::WriteScope writeScope();
   std::int64_t storedKdNodeRows() const;
   void migrate();

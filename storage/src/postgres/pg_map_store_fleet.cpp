@@ -283,17 +283,22 @@ std::vector<std::pair<std::int64_t, double>> PgMapStore::sideLoadPosterior() con
 
 void PgMapStore::sideInsertLocation(const LocationRecord& l) {
   auto scope = writeScope();
+  fresh_locations_.insert(l.id);
   // In the main line's eyes another session's place is in long-term memory: not in its RAM.
   db_->send(
-      "WITH l AS (INSERT INTO locations (id, session_id, weight, tier, created_frame) "
-      "VALUES ($1, $2, $3, 2, $5)) INSERT INTO session_memory (session_id, location_id, tier) "
-      "VALUES ($2, $1, $4)",
+      "WITH l AS (INSERT INTO locations (id, session_id, weight, tier, created_frame, held, "
+      "refs_digest, checksum, link_count) VALUES ($1, $2, $3, 2, $5, 0, $6, $7, 0)) INSERT INTO "
+      "session_memory "
+      "(session_id, location_id, tier) VALUES ($2, $1, $4)",
       detail::PgParams()
           .add(l.id)
           .add(side_session_)
           .add(l.weight)
           .add(std::int64_t{static_cast<int>(l.tier)})
-          .add(l.created_frame));
+          .add(l.created_frame)
+          .add(std::int64_t{detail::refsDigest(l.id, {})})
+          .add(std::int64_t{
+              detail::locationChecksum(l.id, side_session_, l.weight, l.created_frame)}));
   scope.commit();
 }
 

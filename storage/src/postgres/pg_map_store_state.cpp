@@ -1,9 +1,11 @@
 // PgMapStore: what the engine keeps to resume exactly (engine state, kd-forest nodes, the
 // filter's posterior), the memory tiers' place codes and ages, and vocabulary imports.
 #include <cstring>
+#include <map>
 
 #include <nlohmann/json.hpp>
 
+#include "location_rows.h"
 #include "postgres/pg_map_store.h"
 #include "row_checksums.h"
 
@@ -30,6 +32,8 @@ void PgMapStore::putState(const std::string& key, const std::vector<std::uint8_t
                 .add(key)
                 .addBytes(value.data(), value.size())
                 .add(std::int64_t{detail::stateChecksum(key, value.data(), value.size())}));
+  if (const auto location = locationOfKeypointsKey(key))
+    markHeld(*location, detail::kHeldKeypoints, true);
   scope.commit();
 }
 
@@ -66,6 +70,8 @@ void PgMapStore::deleteState(const std::string& key) {
   if (sideKey(key)) return sideDeleteState(key);
   auto scope = writeScope();
   db_->send("DELETE FROM engine_state WHERE key = $1", detail::PgParams().add(key));
+  if (const auto location = locationOfKeypointsKey(key))
+    markHeld(*location, detail::kHeldKeypoints, false);
   scope.commit();
 }
 
@@ -192,11 +198,12 @@ std::vector<KdNodeRecord> PgMapStore::loadKdNodes() const {
 }
 
 void PgMapStore::putPosterior(const std::vector<std::pair<std::int64_t, double>>& posterior) {
-  std::vector<std::int64_t> ids;
+  std::vector<std::int64_t> ids, sums;
   std::vector<double> probabilities;
   for (const auto& [id, p] : posterior) {
     ids.push_back(id);
     probabilities.push_back(p);
+    sums.push_back(detail::posteriorChecksum(id, p));
   }
   if (side_session_) return sidePutPosterior(ids, probabilities);
   auto scope = writeScope();
@@ -207,18 +214,25 @@ void PgMapStore::putPosterior(const std::vector<std::pair<std::int64_t, double>>
   db_->send(
       "WITH gone AS (DELETE FROM filter_posterior f WHERE NOT EXISTS (SELECT 1 FROM "
       "unnest($1::int8[]) AS k(id) WHERE k.id = f.location_id)) "
-      "INSERT INTO filter_posterior (location_id, probability) SELECT * FROM unnest($1::int8[], "
-      "$2::float8[]) ON CONFLICT (location_id) DO UPDATE SET probability = excluded.probability",
-      detail::PgParams().addArray(ids).addArray(probabilities));
+      "INSERT INTO filter_posterior (location_id, probability, checksum) SELECT * FROM "
+      "unnest($1::int8[], $2::float8[], $3::int8[]) ON CONFLICT (location_id) DO UPDATE SET "
+      "probability = excluded.probability, checksum = excluded.checksum",
+      detail::PgParams().addArray(ids).addArray(probabilities).addArray(sums));
   scope.commit();
 }
 
 std::vector<std::pair<std::int64_t, double>> PgMapStore::loadPosterior() const {
   if (side_session_) return sideLoadPosterior();
-  const auto r =
-      db_->run("SELECT location_id, probability FROM filter_posterior ORDER BY location_id");
+  const auto r = db_->run(
+      "SELECT location_id, probability, checksum FROM filter_posterior ORDER BY location_id");
   std::vector<std::pair<std::int64_t, double>> out;
-  for (int i = 0; i < r.rows(); ++i) out.emplace_back(r.integer(i, 0), r.real(i, 1));
+  for (int i = 0; i < r.rows(); ++i) {
+    const std::int64_t id = r.integer(i, 0);
+    if (!sumMatches(r, i, 2, detail::posteriorChecksum(id, r.real(i, 1))))
+      detail::refuseDamagedRow(label_, "filter_posterior", std::to_string(id),
+                               "fails its checksum");
+    out.emplace_back(id, r.real(i, 1));
+  }
   return out;
 }
 
@@ -233,6 +247,7 @@ void PgMapStore::putPlaceCode(std::int64_t location_id, const std::vector<std::i
           .add(location_id)
           .addBytes(code.data(), code.size())
           .add(std::int64_t{detail::placeCodeChecksum(location_id, code.data(), code.size())}));
+  markHeld(location_id, detail::kHeldPlaceCode, true);
   scope.commit();
 }
 
@@ -280,10 +295,16 @@ void PgMapStore::setWmAges(const std::vector<std::pair<std::int64_t, std::int64_
     sideSetWmAges(ids, values);
     return scope.commit();
   }
+  std::vector<std::int64_t> sums;
+  for (std::size_t i = 0; i < ids.size(); ++i)
+    sums.push_back(detail::wmEntryChecksum(ids[i], values[i]));
   db_->send(
-      "INSERT INTO wm_entries (location_id, wm_age) SELECT * FROM unnest($1::int8[], "
-      "$2::int8[]) ON CONFLICT (location_id) DO UPDATE SET wm_age = excluded.wm_age",
-      detail::PgParams().addArray(ids).addArray(values));
+      "WITH e AS (INSERT INTO wm_entries (location_id, wm_age, checksum) SELECT * FROM "
+      "unnest($1::int8[], $2::int8[], $3::int8[]) ON CONFLICT (location_id) DO UPDATE SET "
+      "wm_age = excluded.wm_age, checksum = excluded.checksum) "
+      "UPDATE locations SET held = held | $4 WHERE id = ANY($1) AND (held & $4) = 0",
+      detail::PgParams().addArray(ids).addArray(values).addArray(sums).add(
+          std::int64_t{detail::kHeldWmEntry}));
   scope.commit();
 }
 
@@ -295,6 +316,62 @@ std::map<std::int64_t, std::int64_t> PgMapStore::wmAges() const {
   std::map<std::int64_t, std::int64_t> out;
   for (int i = 0; i < r.rows(); ++i) out.emplace(r.integer(i, 0), r.integer(i, 1));
   return out;
+}
+
+void PgMapStore::checkStoredRows() const {
+  const auto refuse = [this](CheckFinding f) {
+    detail::refuseDamagedRow(label_, f.table, f.row, f.problem);
+  };
+  {
+    std::map<std::int64_t, std::map<std::string, std::string>> settings;
+    const auto rows = db_->run("SELECT session_id, key, value FROM settings");
+    for (int i = 0; i < rows.rows(); ++i)
+      settings[rows.integer(i, 0)][rows.text(i, 1)] = rows.text(i, 2);
+    const auto sessions = db_->run("SELECT id, source, settings_digest FROM sessions");
+    for (int i = 0; i < sessions.rows(); ++i) {
+      const std::int64_t id = sessions.integer(i, 0);
+      if (sessions.optionalInteger(i, 2) !=
+          std::int64_t{detail::settingsDigest(id, sessions.text(i, 1), settings[id])})
+        refuse({"settings", "of session " + std::to_string(id),
+                "do not match the session's settings_digest (a setting was deleted, added or "
+                "changed, or the session's source)"});
+    }
+  }
+  const auto r = db_->run(detail::locationRowFactsQuery().c_str());
+  for (int i = 0; i < r.rows(); ++i) {
+    detail::LocationRowFacts f;
+    f.id = r.integer(i, 0);
+    f.tier = r.optionalInteger(i, 1);
+    f.held = r.optionalInteger(i, 2);
+    f.has_digest = r.boolean(i, 3);
+    f.place_code = r.boolean(i, 4);
+    f.word_descriptors = r.boolean(i, 5);
+    f.keypoints = r.boolean(i, 6);
+    f.wm_entry = r.boolean(i, 7);
+    f.wm_age = r.optionalInteger(i, 8).value_or(0);
+    f.wm_checksum = r.optionalInteger(i, 9);
+    f.session_id = r.integer(i, 10);
+    f.weight = r.integer(i, 11);
+    f.created_frame = r.optionalInteger(i, 12);
+    f.checksum = r.optionalInteger(i, 13);
+    detail::judgeLocationRow(f, refuse);
+  }
+  const auto links = db_->run(detail::linkCountQuery().c_str());
+  for (int i = 0; i < links.rows(); ++i) {
+    const std::string problem =
+        detail::linkCountProblem(links.optionalInteger(i, 1), links.integer(i, 2));
+    if (!problem.empty())
+      refuse({"links", "of location " + std::to_string(links.integer(i, 0)), problem});
+  }
+  for (const char* table : {"place_codes", "wm_entries"}) {
+    const auto orphans =
+        db_->run((std::string("SELECT location_id FROM ") + table +
+                  " o WHERE NOT EXISTS (SELECT 1 FROM locations l WHERE l.id = o.location_id)")
+                     .c_str());
+    if (orphans.rows() > 0)
+      refuse({table, std::to_string(orphans.integer(0, 0)),
+              "belongs to no location (its locations row is missing)"});
+  }
 }
 
 // ---- Vocabulary imports ----

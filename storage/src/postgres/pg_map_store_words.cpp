@@ -4,6 +4,7 @@
 #include <cstring>
 #include <unordered_map>
 
+#include "location_rows.h"
 #include "postgres/pg_map_store.h"
 #include "row_checksums.h"
 
@@ -149,6 +150,7 @@ void PgMapStore::putLocationWordDescriptors(const LocationWordDescriptors& words
           .addBytes(bytes.data(), bytes.size())
           .add(std::int64_t{detail::locationWordDescriptorsChecksum(words.location_id, words.dim,
                                                                     bytes.data(), bytes.size())}));
+  markHeld(words.location_id, detail::kHeldWordDescriptors, true);
   scope.commit();
 }
 
@@ -198,7 +200,10 @@ std::vector<std::int64_t> PgMapStore::importedWordIds() const {
 
 void PgMapStore::insertWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs) {
   auto scope = writeScope();
-  if (refs.empty()) return scope.commit();
+  if (refs.empty()) {  // the digest stays the one written with the rows there are
+    fresh_locations_.erase(location_id);
+    return scope.commit();
+  }
   std::vector<std::int64_t> words;
   std::vector<double> x, y, size, angle, response;
   for (const WordRef& ref : refs) {
@@ -209,6 +214,17 @@ void PgMapStore::insertWordRefs(std::int64_t location_id, const std::vector<Word
     angle.push_back(ref.angle);
     response.push_back(ref.response);
   }
+  // The digest of the whole signature. The engine writes a new location's at once: no earlier row
+  // to read back (a round trip); appending to another's reads them first.
+  std::vector<WordRef> all;
+  if (!fresh_locations_.erase(location_id)) {
+    const auto earlier = db_->run(
+        "SELECT word_id, x, y, size, angle, response FROM word_refs WHERE location_id = $1 "
+        "ORDER BY ordinal",
+        detail::PgParams().add(location_id));
+    all = readRefs(earlier, 0, earlier.rows(), 0);
+  }
+  all.insert(all.end(), refs.begin(), refs.end());
   // Ordinals continue after the location's last one, in the order given.
   db_->send(
       "INSERT INTO word_refs (location_id, ordinal, word_id, x, y, size, angle, response) "
@@ -224,22 +240,26 @@ void PgMapStore::insertWordRefs(std::int64_t location_id, const std::vector<Word
           .addArray(size)
           .addArray(angle)
           .addArray(response));
+  db_->send(
+      "UPDATE locations SET refs_digest = $2 WHERE id = $1",
+      detail::PgParams().add(location_id).add(std::int64_t{detail::refsDigest(location_id, all)}));
   scope.commit();
 }
 
 void PgMapStore::replaceWordRefs(std::int64_t location_id, const std::vector<WordRef>& refs) {
   auto scope = writeScope();
   db_->send("DELETE FROM word_refs WHERE location_id = $1", detail::PgParams().add(location_id));
+  fresh_locations_.insert(location_id);  // no earlier reference left
+  if (refs.empty())
+    db_->send(
+        "UPDATE locations SET refs_digest = $2 WHERE id = $1",
+        detail::PgParams().add(location_id).add(std::int64_t{detail::refsDigest(location_id, {})}));
   insertWordRefs(location_id, refs);
   scope.commit();
 }
 
 std::vector<WordRef> PgMapStore::loadWordRefs(std::int64_t location_id) const {
-  const auto r = db_->run(
-      "SELECT word_id, x, y, size, angle, response FROM word_refs WHERE location_id = $1 "
-      "ORDER BY ordinal",
-      detail::PgParams().add(location_id));
-  return readRefs(r, 0, r.rows(), 0);
+  return std::move(loadWordRefs(std::vector<std::int64_t>{location_id})[location_id]);
 }
 
 std::map<std::int64_t, std::vector<WordRef>> PgMapStore::loadWordRefs(
@@ -247,27 +267,59 @@ std::map<std::int64_t, std::vector<WordRef>> PgMapStore::loadWordRefs(
   std::map<std::int64_t, std::vector<WordRef>> out;
   for (std::int64_t id : location_ids) out[id];
   const auto r = db_->run(
-      "SELECT location_id, word_id, x, y, size, angle, response FROM word_refs "
+      "SELECT location_id, word_id, x, y, size, angle, response, ordinal FROM word_refs "
       "WHERE location_id = ANY($1) ORDER BY location_id, ordinal",
       detail::PgParams().addArray(location_ids));
+  for (int i = 0; i < r.rows(); ++i) {
+    const std::string fault =
+        detail::refValueFault(r.real(i, 2), r.real(i, 3), r.real(i, 4), r.real(i, 5), r.real(i, 6));
+    if (!fault.empty())
+      detail::refuseDamagedRow(
+          label_, "word_refs",
+          "(" + std::to_string(r.integer(i, 0)) + ", " + std::to_string(r.integer(i, 7)) + ")",
+          fault);
+  }
   for (int start = 0; start < r.rows();) {
     int end = start;
     while (end < r.rows() && r.integer(end, 0) == r.integer(start, 0)) ++end;
     out[r.integer(start, 0)] = readRefs(r, start, end, 1);
     start = end;
   }
+  requireRefsDigests(out);
   return out;
+}
+
+void PgMapStore::requireRefsDigests(
+    const std::map<std::int64_t, std::vector<WordRef>>& refs) const {
+  std::vector<std::int64_t> ids;
+  for (const auto& entry : refs) ids.push_back(entry.first);
+  const auto r = db_->run("SELECT id, refs_digest FROM locations WHERE id = ANY($1)",
+                          detail::PgParams().addArray(ids));
+  std::map<std::int64_t, std::optional<std::int64_t>> digests;
+  for (int i = 0; i < r.rows(); ++i) digests[r.integer(i, 0)] = r.optionalInteger(i, 1);
+  for (const auto& [id, rows] : refs) {
+    const auto found = digests.find(id);
+    if (found == digests.end()) {
+      if (rows.empty()) continue;  // no location, no references: nothing was read
+      detail::refuseDamagedRow(label_, "locations", std::to_string(id),
+                               "is missing (its word_refs are read)");
+    }
+    if (found->second != std::int64_t{detail::refsDigest(id, rows)})
+      detail::refuseDamagedRow(label_, "word_refs", "of location " + std::to_string(id),
+                               "do not match the location's refs_digest (" +
+                                   std::to_string(rows.size()) +
+                                   " rows: a reference was deleted, added or changed)");
+  }
 }
 
 std::map<std::int64_t, std::vector<std::int64_t>> PgMapStore::loadWordIds(
     const std::vector<std::int64_t>& location_ids) const {
+  // The whole references are read, to check them against the location's digest.
   std::map<std::int64_t, std::vector<std::int64_t>> out;
-  for (std::int64_t id : location_ids) out[id];
-  const auto r = db_->run(
-      "SELECT location_id, word_id FROM word_refs WHERE location_id = ANY($1) "
-      "ORDER BY location_id, ordinal",
-      detail::PgParams().addArray(location_ids));
-  for (int i = 0; i < r.rows(); ++i) out[r.integer(i, 0)].push_back(r.integer(i, 1));
+  for (auto& [id, refs] : loadWordRefs(location_ids)) {
+    auto& ids = out[id];
+    for (const WordRef& ref : refs) ids.push_back(ref.word_id);
+  }
   return out;
 }
 
@@ -299,9 +351,13 @@ void PgMapStore::insertLink(std::int64_t a, std::int64_t b, LinkType type,
                        "link of location " + std::to_string(a) + " to itself");
   }
   auto scope = writeScope();
+  // Both ends count a new link (schema 15, locations.link_count); xmax is 0 on a row inserted.
   db_->send(
-      "INSERT INTO links (location_a, location_b, type, score) VALUES ($1, $2, $3, $4) "
-      "ON CONFLICT (location_a, location_b, type) DO UPDATE SET score = excluded.score",
+      "WITH k AS (INSERT INTO links (location_a, location_b, type, score) VALUES ($1, $2, $3, $4) "
+      "ON CONFLICT (location_a, location_b, type) DO UPDATE SET score = excluded.score "
+      "RETURNING (xmax = 0) AS inserted) "
+      "UPDATE locations SET link_count = link_count + 1 WHERE id IN ($1, $2) AND "
+      "(SELECT inserted FROM k)",
       detail::PgParams()
           .add(std::min(a, b))
           .add(std::max(a, b))

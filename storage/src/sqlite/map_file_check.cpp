@@ -5,6 +5,9 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <map>
+#include <mutex>
+#include <set>
 #include <vector>
 
 #include <sys/stat.h>
@@ -177,30 +180,77 @@ MapIdentity inspectIdentity(const std::string& path) {
   return readIdentity(*db, path);
 }
 
-void checkSchemaObjects(Database& db, const std::string& path) {
-  // What a map of this version holds, made once by running the embedded migrations in memory.
-  static const std::vector<std::string> kExpected = [] {
+namespace {
+
+// "table T", "index I" and "column T.C" for every table, index and column of `db` but SQLite's.
+std::set<std::string> schemaObjectsIn(Database& db) {
+  std::set<std::string> objects;
+  Statement list(db.handle(),
+                 "SELECT type || ' ' || name FROM sqlite_master "
+                 "WHERE type IN ('table', 'index') AND name NOT LIKE 'sqlite_%'");
+  while (list.step()) objects.insert(list.columnText(0));
+  Statement columns(db.handle(),
+                    "SELECT 'column ' || m.name || '.' || c.name FROM sqlite_master AS m, "
+                    "pragma_table_info(m.name) AS c "
+                    "WHERE m.type = 'table' AND m.name NOT LIKE 'sqlite_%'");
+  while (columns.step()) objects.insert(columns.columnText(0));
+  return objects;
+}
+
+// What a map of schema `version` holds, made once per version by running the embedded
+// migrations in memory.
+const std::set<std::string>& schemaObjectsOf(int version) {
+  static std::mutex mutex;
+  static std::map<int, std::set<std::string>> made;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto it = made.find(version);
+  if (it == made.end()) {
     Database blank(":memory:", SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
-    applyMigrations(blank, currentSchemaVersion());
-    std::vector<std::string> names;
-    Statement list(blank.handle(),
-                   "SELECT type || ' ' || name FROM sqlite_master "
-                   "WHERE type IN ('table', 'index') AND name NOT LIKE 'sqlite_%' ORDER BY 1");
-    while (list.step()) names.push_back(list.columnText(0));
-    return names;
-  }();
+    applyMigrations(blank, version);
+    it = made.emplace(version, schemaObjectsIn(blank)).first;
+  }
+  return it->second;
+}
+
+}  // namespace
+
+std::vector<std::string> schemaMismatches(Database& db, int version) {
+  std::vector<std::string> found;
   try {
-    Statement present(db.handle(), "SELECT 1 FROM sqlite_master WHERE type || ' ' || name = ?1");
-    for (const auto& object : kExpected) {
-      present.reset();
-      present.bind(1, object);
-      if (!present.step()) refuse(path, "damaged: " + object + " is missing");
+    const std::set<std::string> present = schemaObjectsIn(db);
+    const std::set<std::string>& expected = schemaObjectsOf(version);
+    const std::set<std::string>& newest = schemaObjectsOf(currentSchemaVersion());
+    for (const auto& object : expected)
+      if (!present.count(object)) found.push_back(object + " is missing");
+    // A map's own indexes and tables are its owner's business (SCHEMA.md suggests an index in a
+    // copy); what a later schema has, or a column in one of placedb's tables, is not.
+    for (const auto& object : present) {
+      if (expected.count(object)) continue;
+      const bool later = newest.count(object) != 0;
+      const bool column_of_ours =
+          object.rfind("column ", 0) == 0 &&
+          expected.count("table " + object.substr(7, object.find('.') - 7)) != 0;
+      if (later || column_of_ours)
+        found.push_back(object + " is there, which schema " + std::to_string(version) +
+                        " does not have");
     }
   } catch (const StorageError& error) {
     if (error.code() == ErrorCode::kMapRefused && error.sqliteCode() != 0)
-      refuse(path, error.sqliteMessage());
-    throw;
+      found.push_back(error.sqliteMessage());
+    else
+      throw;
   }
+  return found;
+}
+
+void checkSchemaObjects(Database& db, const std::string& path, int version) {
+  const std::vector<std::string> mismatches = schemaMismatches(db, version);
+  if (mismatches.empty()) return;
+  refuse(path, version == currentSchemaVersion()
+                   ? "damaged: " + mismatches.front()
+                   : "its schema version is " + std::to_string(version) +
+                         " but its tables are not that schema's (" + mismatches.front() +
+                         "): it was changed by hand, and cannot be upgraded");
 }
 
 void checkIntegrity(Database& db, const std::string& path) {
@@ -212,6 +262,22 @@ void checkIntegrity(Database& db, const std::string& path) {
     throw;
   }
   if (finding != "ok") refuse(path, "damaged (SQLite's quick_check: " + finding + ")");
+}
+
+void checkForeignKeys(Database& db, const std::string& path) {
+  try {
+    Statement check(db.handle(), "PRAGMA foreign_key_check");
+    if (check.step())
+      refuse(path,
+             "damaged: " + check.columnText(0) +
+                 (check.isNull(1) ? std::string() : " row " + std::to_string(check.columnInt(1))) +
+                 " refers to a missing row of " + check.columnText(2) +
+                 " (placedb check lists every such row)");
+  } catch (const StorageError& error) {
+    if (error.code() == ErrorCode::kMapRefused && error.sqliteCode() != 0)
+      refuse(path, "damaged: " + error.sqliteMessage());
+    throw;
+  }
 }
 
 MapIdentity readIdentity(Database& db, const std::string& path) {

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "sqlite/database.h"
 
@@ -42,14 +43,32 @@ std::unique_ptr<Database> openForInspection(const std::string& path);
 // Reads the identity without creating any file next to the map.
 MapIdentity inspectIdentity(const std::string& path);
 
-// Throws kMapRefused naming the first table or index of the current schema that the map lacks
-// (the map was edited by hand or damaged); the engine could not run without it.
-void checkSchemaObjects(Database& db, const std::string& path);
+// How the map's tables, indexes and columns differ from those of schema `version`: one line per
+// difference ("index locations_by_tier is missing", "column locations.x is there, which schema
+// 13 does not have"). A map's own extra tables and indexes are not differences, unless a later
+// schema has them. Empty when the map is that schema's.
+std::vector<std::string> schemaMismatches(Database& db, int version);
+
+// Throws kMapRefused naming the first difference of schemaMismatches() (the map was edited by
+// hand or damaged, or its user_version changed: the engine could not run on it, and an upgrade
+// would fail in the middle).
+void checkSchemaObjects(Database& db, const std::string& path, int version);
 
 // PRAGMA quick_check: reads every page of the file (b-tree structure, record formats, index
 // order and counts; not UNIQUE/foreign-key contents), so its cost grows with the file. Throws
 // kMapRefused with SQLite's first finding when the file is malformed.
 void checkIntegrity(Database& db, const std::string& path);
+
+// PRAGMA foreign_key_check: a row naming one that is not there (a locations or frames row
+// deleted with foreign keys off). Throws kMapRefused naming the first such row. It looks every
+// reference up, so it costs about a page check's time; it runs with it.
+void checkForeignKeys(Database& db, const std::string& path);
+
+// Every row sum (schema 8) and stored count, as placedb check verifies them: what the page check
+// adds on a map small enough for it, so that a row damaged in long-term memory is refused at
+// open, not when a later frame reads it. Throws kMapRefused naming the first damaged row.
+// (map_check.cpp)
+void checkRowSums(Database& db, const std::string& path);
 
 // What to do with a file whose identity is known.
 enum class Verdict { kUpToDate, kNeedsMigration, kBlankSqlite };

@@ -3,6 +3,7 @@
 #include "placedb/storage/migrations.h"
 #include "sqlite/migrations_apply.h"
 #include "sqlite/sqlite_checksums.h"
+#include "sqlite/sqlite_location_rows.h"
 
 namespace placedb::storage {
 
@@ -27,6 +28,7 @@ void applyMigrations(Database& db, int target_version) {
         try {
           db.exec(migration.sql);
           if (migration.version == kChecksumSchemaVersion) fillChecksums(db);
+          if (migration.version == kLocationRowsSchemaVersion) fillLocationRows(db);
         } catch (const StorageError& error) {
           if (error.code() == ErrorCode::kDiskFull || error.code() == ErrorCode::kMapBusy ||
               error.code() == ErrorCode::kIo)

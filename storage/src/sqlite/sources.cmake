@@ -2,6 +2,7 @@
 target_sources(placedb_storage PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/database.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sqlite_checksums.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/sqlite_location_rows.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sqlite_map_check.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_file_check.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_files.cpp

@@ -13,6 +13,7 @@
 #include "sqlite/database.h"
 #include "sqlite/map_file_check.h"
 #include "sqlite/sqlite_checksums.h"
+#include "sqlite/sqlite_location_rows.h"
 
 namespace placedb::storage {
 namespace {
@@ -78,7 +79,9 @@ class Checker {
   // Visits every row of `sql`; `verify` returns false for a damaged row and names it.
   template <typename Verify>
   void rows(const std::string& table, const std::string& sql, Verify verify) {
-    const std::int64_t total = db_.queryInt("SELECT count(*) FROM " + table);
+    // Counted for the progress line only: a count is a scan of its own.
+    const std::int64_t total =
+        options_.progress ? db_.queryInt("SELECT count(*) FROM " + table) : 0;
     progress(table, 0, total);
     Statement s(db_.handle(), sql);
     std::int64_t done = 0;
@@ -105,7 +108,8 @@ class Checker {
                float value;
                std::memcpy(&value, data + at, sizeof value);
                if (!std::isfinite(value))
-                 return find("words", std::to_string(id), "holds a value that is not finite");
+                 return find("words", std::to_string(id),
+                             "holds a value that is not a finite number");
              }
            }
          });
@@ -191,6 +195,28 @@ class Checker {
              "holds " + std::to_string(counted[session]) + " rows where the map recorded " + text);
   }
 
+  // What every location's rows must hold (schema 15): the rows its held bits name and no others,
+  // its references against their digest, a valid tier; and the sums of the posterior's rows.
+  void locationRows() {
+    progress("locations", 0, 0);
+    const auto sink = [this](CheckFinding f) {
+      find(std::move(f.table), std::move(f.row), std::move(f.problem));
+    };
+    detail::checkSessionRows(db_, sink);
+    detail::checkLocationRows(db_, sink);
+    progress("word_refs", 0, 0);
+    detail::checkLocationRefs(db_, sink);
+    detail::checkLinkCounts(db_, sink);
+    progress("frames", 0, 0);
+    detail::checkFrameRows(db_, sink);
+    rows("filter_posterior", "SELECT location_id, probability, checksum FROM filter_posterior",
+         [&](const Statement& s) {
+           if (!detail::checksumMatches(
+                   s, 2, detail::posteriorChecksum(s.columnInt(0), s.columnDouble(1))))
+             find("filter_posterior", std::to_string(s.columnInt(0)), "fails its checksum");
+         });
+  }
+
   // Values the engine refuses when it loads them, found here without loading the engine.
   void values() {
     progress("values", 0, 0);
@@ -239,6 +265,24 @@ std::unique_ptr<Database> openCheckConnection(const std::string& path, bool* wri
 
 }  // namespace
 
+namespace detail {
+
+void checkRowSums(Database& db, const std::string& path) {
+  CheckOptions options;
+  options.max_findings = 1;
+  CheckReport report;
+  Checker checker(db, options, report);
+  checker.checksums();
+  checker.sideSessions();
+  checker.locationWordDescriptors();
+  if (!report.findings.empty()) {
+    const CheckFinding& f = report.findings.front();
+    refuseDamagedRow(path, f.table, f.row, f.problem);
+  }
+}
+
+}  // namespace detail
+
 CheckReport checkSqliteMap(const std::string& given_path, const CheckOptions& options) {
   const std::string path = detail::resolveMapPath(given_path);
   const detail::FileState state = detail::checkRawFile(path);
@@ -267,10 +311,21 @@ CheckReport checkSqliteMap(const std::string& given_path, const CheckOptions& op
       db->exec("COMMIT");
       return report;
     }
+    // Tables of another schema than the version says: `map` refuses them (an upgrade would fail
+    // halfway), and the row checks below would read columns that are not there.
+    for (const auto& mismatch : detail::schemaMismatches(*db, report.schema_version))
+      checker.find(
+          "schema", "",
+          mismatch + " (the map says schema " + std::to_string(report.schema_version) + ")");
+    if (!report.ok()) {
+      db->exec("COMMIT");
+      return report;
+    }
     checker.foreignKeys();
     if (report.checksums) checker.checksums();
     if (report.schema_version >= kFleetSchemaVersion) checker.sideSessions();
     if (report.schema_version >= kLocationWordsSchemaVersion) checker.locationWordDescriptors();
+    if (report.schema_version >= detail::kLocationRowsSchemaVersion) checker.locationRows();
     checker.values();
     if (report.ok() && options.last_check && report.schema_version == currentSchemaVersion()) {
       if (options.progress) options.progress({"engine state", 0, 0});

@@ -11,9 +11,12 @@
 
 #include "placedb/storage/map_files.h"
 #include "placedb/storage/migrations.h"
+#include "row_checksums.h"
 #include "sqlite/database.h"
 #include "sqlite/map_file_check.h"
 #include "sqlite/migrations_apply.h"
+#include "sqlite/sqlite_checksums.h"
+#include "sqlite/sqlite_location_rows.h"
 #include "sqlite/wal_checkpointer.h"
 
 namespace placedb::storage {
@@ -112,7 +115,17 @@ SqliteMapStore::SqliteMapStore(const std::string& given_path, OpenMode mode,
     }
     db_ = detail::openReadOnly(path);
     sqlite3_busy_timeout(db_->handle(), options.busy_timeout_ms);
-    detail::checkSchemaObjects(*db_, path);
+    detail::checkSchemaObjects(*db_, path, current);
+    if (options.check_references) {
+      std::error_code size_error;
+      const auto bytes = std::filesystem::file_size(path, size_error);
+      if (options.integrity_check_max_bytes <= 0 ||
+          (!size_error && std::int64_t(bytes) <= options.integrity_check_max_bytes)) {
+        db_->queryInt("PRAGMA mmap_size = " + std::to_string(options.integrity_check_max_bytes));
+        checkRowsAgree(path);
+        db_->queryInt("PRAGMA mmap_size = 0");
+      }
+    }
     return;
   }
 
@@ -122,14 +135,18 @@ SqliteMapStore::SqliteMapStore(const std::string& given_path, OpenMode mode,
     // identity here, every page below (a write can spread damage that no read of this session
     // would have met).
     auto reader = detail::openForInspection(path);
-    const auto verdict = detail::judgeIdentity(detail::readIdentity(*reader, path), path, current);
+    const detail::MapIdentity identity = detail::readIdentity(*reader, path);
+    const auto verdict = detail::judgeIdentity(identity, path, current);
     std::error_code size_error;
     const auto bytes = std::filesystem::file_size(path, size_error);
     const bool small_enough =
         options.integrity_check_max_bytes <= 0 ||
         (!size_error && std::int64_t(bytes) <= options.integrity_check_max_bytes);
     check_pages = verdict != detail::Verdict::kBlankSqlite && small_enough;
-    if (verdict == detail::Verdict::kUpToDate) detail::checkSchemaObjects(*reader, path);
+    // An older map's tables must be its version's too: an upgrade of other tables would fail
+    // halfway (a user_version changed by hand).
+    if (verdict != detail::Verdict::kBlankSqlite)
+      detail::checkSchemaObjects(*reader, path, identity.user_version);
   }
   lock_fd_ = acquireWriterLock(path);
   try {
@@ -141,7 +158,13 @@ SqliteMapStore::SqliteMapStore(const std::string& given_path, OpenMode mode,
     sqlite3_busy_timeout(db_->handle(), options.busy_timeout_ms);
     // On this connection, before its first write: SQLite verifies CHECK constraints in
     // quick_check only on a connection that could write (a tier of 7 passes a read-only one).
-    if (check_pages) detail::checkIntegrity(*db_, path);
+    if (check_pages) {
+      // Read through a memory map while every page is read: half the time of read() copies.
+      db_->queryInt("PRAGMA mmap_size = " + std::to_string(options.integrity_check_max_bytes));
+      detail::checkIntegrity(*db_, path);
+      checkRowsAgree(path);
+      db_->queryInt("PRAGMA mmap_size = 0");
+    }
     if (options.max_page_count > 0) {
       db_->queryInt("PRAGMA max_page_count = " + std::to_string(options.max_page_count));
     }
@@ -152,7 +175,7 @@ SqliteMapStore::SqliteMapStore(const std::string& given_path, OpenMode mode,
     // 32 MB of page cache: the word index is updated at random places every frame.
     db_->exec("PRAGMA cache_size = -32768");
     if (schemaVersion() < current) detail::applyMigrations(*db_, current);
-    detail::checkSchemaObjects(*db_, path);
+    detail::checkSchemaObjects(*db_, path, current);
     db_->exec("PRAGMA foreign_keys = ON");
     checkpointer_ = std::make_unique<detail::WalCheckpointer>(db_->handle(), path);
   } catch (...) {
@@ -214,6 +237,10 @@ std::int64_t SqliteMapStore::beginSession(const std::string& source,
     s->bind(3, value);
     s->run();
   }
+  auto digest = db_->cached("UPDATE sessions SET settings_digest = ?2 WHERE id = ?1");
+  digest->bind(1, session_id);
+  digest->bind(2, std::int64_t{detail::settingsDigest(session_id, source, settings)});
+  digest->run();
   scope.commit();
   return session_id;
 }
@@ -276,6 +303,15 @@ std::map<std::string, std::string> SqliteMapStore::settings(std::int64_t session
   s->bind(1, session_id);
   std::map<std::string, std::string> result;
   while (s->step()) result[s->columnText(0)] = s->columnText(1);
+  // A setting deleted would resume the session with its default, one added with another value.
+  auto digest = db_->cached("SELECT source, settings_digest FROM sessions WHERE id = ?1");
+  digest->bind(1, session_id);
+  if (digest->step() &&
+      !detail::checksumMatches(*digest, 1,
+                               detail::settingsDigest(session_id, digest->columnText(0), result)))
+    detail::refuseDamagedRow(path_, "settings", "of session " + std::to_string(session_id),
+                             "do not match the session's settings_digest (a setting was deleted, "
+                             "added or changed, or the session's source)");
   return result;
 }
 
@@ -370,27 +406,36 @@ std::optional<FrameRecord> SqliteMapStore::lastFrame() const {
 
 void SqliteMapStore::insertLocation(const LocationRecord& l) {
   auto scope = writeScope();
+  // It holds no other row yet: each is marked as it is written (location_rows.h).
   auto s = db_->cached(
-      "INSERT INTO locations (id, session_id, weight, tier, created_frame) "
-      "VALUES (?1, ?2, ?3, ?4, ?5)");
+      "INSERT INTO locations (id, session_id, weight, tier, created_frame, held, refs_digest, "
+      "checksum, link_count) VALUES (?1, ?2, ?3, ?4, ?5, 0, ?6, ?7, 0)");
   s->bind(1, l.id);
   s->bind(2, l.session_id);
   s->bind(3, l.weight);
   s->bind(4, std::int64_t{static_cast<int>(l.tier)});
   s->bind(5, l.created_frame);
+  s->bind(6, std::int64_t{detail::refsDigest(l.id, {})});
+  s->bind(7, std::int64_t{detail::locationChecksum(l.id, l.session_id, l.weight, l.created_frame)});
   s->run();
   scope.commit();
 }
 
 void SqliteMapStore::updateWeight(std::int64_t location_id, std::int64_t weight) {
   auto scope = writeScope();
-  auto s = db_->cached("UPDATE locations SET weight = ?2 WHERE id = ?1");
+  auto s = db_->cached(
+      "UPDATE locations SET weight = ?2 WHERE id = ?1 RETURNING session_id, created_frame");
   s->bind(1, location_id);
   s->bind(2, weight);
-  s->run();
-  if (sqlite3_changes(db_->handle()) != 1) {
+  if (!s->step())
     throw StorageError(ErrorCode::kInvalidArgument, "no location " + std::to_string(location_id));
-  }
+  const std::uint32_t sum =
+      detail::locationChecksum(location_id, s->columnInt(0), weight, s->columnOptionalInt(1));
+  s->reset();
+  auto sum_update = db_->cached("UPDATE locations SET checksum = ?2 WHERE id = ?1");
+  sum_update->bind(1, location_id);
+  sum_update->bind(2, std::int64_t{sum});
+  sum_update->run();
   scope.commit();
 }
 
@@ -412,10 +457,55 @@ void SqliteMapStore::deleteLocation(std::int64_t location_id) {
     s->bind(1, location_id);
     s->run();
   }
+  {
+    auto s = db_->cached("DELETE FROM engine_state WHERE key = ?1");
+    s->bind(1, locationKeypointsKey(location_id));
+    s->run();
+  }
+  {
+    // Its links go with it (ON DELETE CASCADE): the locations at their other ends count one less.
+    auto s = db_->cached(
+        "UPDATE locations SET link_count = link_count - (SELECT count(*) FROM links k WHERE "
+        "(k.location_a = ?1 AND k.location_b = locations.id) OR (k.location_b = ?1 AND "
+        "k.location_a = locations.id)) WHERE id IN (SELECT location_b FROM links WHERE "
+        "location_a = ?1 UNION SELECT location_a FROM links WHERE location_b = ?1)");
+    s->bind(1, location_id);
+    s->run();
+  }
   auto s = db_->cached("DELETE FROM locations WHERE id = ?1");
   s->bind(1, location_id);
   s->run();
   scope.commit();
+}
+
+void SqliteMapStore::markHeld(std::int64_t location_id, std::int64_t bit, bool held) {
+  // Unchanged rows are not written again (a location brought back keeps its WM age bit).
+  auto s =
+      db_->cached(held ? "UPDATE locations SET held = held | ?2 WHERE id = ?1 AND held & ?2 = 0"
+                       : "UPDATE locations SET held = held & ~?2 WHERE id = ?1 AND held & ?2 != 0");
+  s->bind(1, location_id);
+  s->bind(2, bit);
+  s->run();
+}
+
+void SqliteMapStore::checkRowsAgree(const std::string& path) const {
+  detail::checkForeignKeys(*db_, path);
+  if (schemaVersion() < detail::kLocationRowsSchemaVersion) return;  // recorded when upgraded
+  const auto refuse = [&path](CheckFinding f) {
+    detail::refuseDamagedRow(path, f.table, f.row, f.problem);
+  };
+  detail::checkRowSums(*db_, path);
+  detail::checkLocationRefs(*db_, refuse);
+  detail::checkLinkCounts(*db_, refuse);
+  detail::checkFrameRows(*db_, refuse);
+}
+
+void SqliteMapStore::checkStoredRows() const {
+  const auto refuse = [this](CheckFinding f) {
+    detail::refuseDamagedRow(path_, f.table, f.row, f.problem);
+  };
+  detail::checkSessionRows(*db_, refuse);
+  detail::checkLocationRows(*db_, refuse);
 }
 
 void SqliteMapStore::addCoveredFrame(std::int64_t location_id, std::int64_t frame_id) {

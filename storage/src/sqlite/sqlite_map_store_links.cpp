@@ -15,6 +15,15 @@ void SqliteMapStore::insertLink(std::int64_t a, std::int64_t b, LinkType type,
                        "link of location " + std::to_string(a) + " to itself");
   }
   auto scope = writeScope();
+  bool known = false;
+  {
+    auto s =
+        db_->cached("SELECT 1 FROM links WHERE location_a = ?1 AND location_b = ?2 AND type = ?3");
+    s->bind(1, std::min(a, b));
+    s->bind(2, std::max(a, b));
+    s->bind(3, std::int64_t{static_cast<int>(type)});
+    known = s->step();
+  }
   auto s = db_->cached(
       "INSERT INTO links (location_a, location_b, type, score) VALUES (?1, ?2, ?3, ?4) "
       "ON CONFLICT (location_a, location_b, type) DO UPDATE SET score = excluded.score");
@@ -23,6 +32,13 @@ void SqliteMapStore::insertLink(std::int64_t a, std::int64_t b, LinkType type,
   s->bind(3, std::int64_t{static_cast<int>(type)});
   s->bind(4, score);
   s->run();
+  if (!known) {  // both ends count it (schema 15, locations.link_count)
+    auto count =
+        db_->cached("UPDATE locations SET link_count = link_count + 1 WHERE id IN (?1, ?2)");
+    count->bind(1, a);
+    count->bind(2, b);
+    count->run();
+  }
   scope.commit();
 }
 

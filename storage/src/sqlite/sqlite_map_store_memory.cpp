@@ -4,6 +4,7 @@
 #include "placedb/storage/sqlite_map_store.h"
 #include "sqlite/database.h"
 #include "sqlite/sqlite_checksums.h"
+#include "sqlite/sqlite_location_rows.h"
 
 namespace placedb::storage {
 
@@ -15,6 +16,7 @@ void SqliteMapStore::putPlaceCode(std::int64_t location_id, const std::vector<st
   s->bindBlob(2, code.data(), code.size());
   s->bind(3, std::int64_t{detail::placeCodeChecksum(location_id, code.data(), code.size())});
   s->run();
+  markHeld(location_id, detail::kHeldPlaceCode, true);
   scope.commit();
 }
 
@@ -48,11 +50,14 @@ std::optional<std::vector<std::int8_t>> SqliteMapStore::placeCode(std::int64_t l
 
 void SqliteMapStore::setWmAges(const std::vector<std::pair<std::int64_t, std::int64_t>>& ages) {
   auto scope = writeScope();
-  auto s = db_->cached("INSERT OR REPLACE INTO wm_entries (location_id, wm_age) VALUES (?1, ?2)");
+  auto s = db_->cached(
+      "INSERT OR REPLACE INTO wm_entries (location_id, wm_age, checksum) VALUES (?1, ?2, ?3)");
   for (const auto& [id, age] : ages) {
     s->bind(1, id);
     s->bind(2, age);
+    s->bind(3, std::int64_t{detail::wmEntryChecksum(id, age)});
     s->run();
+    markHeld(id, detail::kHeldWmEntry, true);
   }
   scope.commit();
 }

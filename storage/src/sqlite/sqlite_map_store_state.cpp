@@ -5,6 +5,7 @@
 #include "placedb/storage/sqlite_map_store.h"
 #include "sqlite/database.h"
 #include "sqlite/sqlite_checksums.h"
+#include "sqlite/sqlite_location_rows.h"
 #include "sqlite/sqlite_rows.h"
 
 namespace placedb::storage {
@@ -20,6 +21,8 @@ void SqliteMapStore::putState(const std::string& key, const std::vector<std::uin
   s->bindBlob(2, value.data(), value.size());
   s->bind(3, std::int64_t{detail::stateChecksum(key, value.data(), value.size())});
   s->run();
+  if (const auto location = locationOfKeypointsKey(key))
+    markHeld(*location, detail::kHeldKeypoints, true);
   scope.commit();
 }
 
@@ -60,6 +63,8 @@ void SqliteMapStore::deleteState(const std::string& key) {
   auto s = db_->cached("DELETE FROM engine_state WHERE key = ?1");
   s->bind(1, key);
   s->run();
+  if (const auto location = locationOfKeypointsKey(key))
+    markHeld(*location, detail::kHeldKeypoints, false);
   scope.commit();
 }
 
@@ -168,19 +173,28 @@ void SqliteMapStore::putPosterior(const std::vector<std::pair<std::int64_t, doub
     auto s = db_->cached("DELETE FROM filter_posterior");
     s->run();
   }
-  static const detail::RowInserts sql("INSERT", "filter_posterior (location_id, probability)", 2);
+  static const detail::RowInserts sql("INSERT",
+                                      "filter_posterior (location_id, probability, checksum)", 3);
   detail::insertRows(*db_, sql, posterior.size(), [&](detail::Statement& s, int at, std::size_t i) {
-    s.bind(at + 1, posterior[i].first);
-    s.bind(at + 2, posterior[i].second);
+    const auto& [location, probability] = posterior[i];
+    s.bind(at + 1, location);
+    s.bind(at + 2, probability);
+    s.bind(at + 3, std::int64_t{detail::posteriorChecksum(location, probability)});
   });
   scope.commit();
 }
 
 std::vector<std::pair<std::int64_t, double>> SqliteMapStore::loadPosterior() const {
-  auto s =
-      db_->cached("SELECT location_id, probability FROM filter_posterior ORDER BY location_id");
+  auto s = db_->cached(
+      "SELECT location_id, probability, checksum FROM filter_posterior ORDER BY location_id");
   std::vector<std::pair<std::int64_t, double>> result;
-  while (s->step()) result.emplace_back(s->columnInt(0), s->columnDouble(1));
+  while (s->step()) {
+    const std::int64_t location = s->columnInt(0);
+    if (!detail::checksumMatches(*s, 2, detail::posteriorChecksum(location, s->columnDouble(1))))
+      detail::refuseDamagedRow(path_, "filter_posterior", std::to_string(location),
+                               "fails its checksum");
+    result.emplace_back(location, s->columnDouble(1));
+  }
   return result;
 }
 

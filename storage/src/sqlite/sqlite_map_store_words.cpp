@@ -9,6 +9,7 @@
 #include "placedb/storage/sqlite_map_store.h"
 #include "sqlite/database.h"
 #include "sqlite/sqlite_checksums.h"
+#include "sqlite/sqlite_location_rows.h"
 #include "sqlite/sqlite_rows.h"
 
 namespace placedb::storage {
@@ -144,6 +145,7 @@ void SqliteMapStore::putLocationWordDescriptors(const LocationWordDescriptors& w
   s->bind(4, std::int64_t{detail::locationWordDescriptorsChecksum(words.location_id, words.dim,
                                                                   bytes.data(), bytes.size())});
   s->run();
+  markHeld(words.location_id, detail::kHeldWordDescriptors, true);
   scope.commit();
 }
 
@@ -207,6 +209,15 @@ void SqliteMapStore::insertWordRefs(std::int64_t location_id, const std::vector<
     s.bind(at + 7, double{r.angle});
     s.bind(at + 8, double{r.response});
   });
+  // The digest of the whole signature: the rows just written, after those already there (a
+  // signature is written once by the engine; appending reads the earlier rows back).
+  const std::uint32_t digest =
+      ordinal == 0 ? detail::refsDigest(location_id, refs)
+                   : detail::refsDigest(location_id, readWordRefs(location_id, nullptr));
+  auto update = db_->cached("UPDATE locations SET refs_digest = ?2 WHERE id = ?1");
+  update->bind(1, location_id);
+  update->bind(2, std::int64_t{digest});
+  update->run();
   scope.commit();
 }
 
@@ -221,19 +232,53 @@ void SqliteMapStore::replaceWordRefs(std::int64_t location_id, const std::vector
   scope.commit();
 }
 
-std::vector<WordRef> SqliteMapStore::loadWordRefs(std::int64_t location_id) const {
+std::vector<WordRef> SqliteMapStore::readWordRefs(std::int64_t location_id,
+                                                  detail::RefsDigest* digest) const {
   auto s = db_->cached(
-      "SELECT word_id, x, y, size, angle, response FROM word_refs WHERE location_id = ?1 "
+      "SELECT word_id, x, y, size, angle, response, ordinal FROM word_refs WHERE location_id = ?1 "
       "ORDER BY ordinal");
   s->bind(1, location_id);
   std::vector<WordRef> result;
   while (s->step()) {
-    result.push_back(
-        WordRef{s->columnInt(0), static_cast<float>(s->columnDouble(1)),
-                static_cast<float>(s->columnDouble(2)), static_cast<float>(s->columnDouble(3)),
-                static_cast<float>(s->columnDouble(4)), static_cast<float>(s->columnDouble(5))});
+    const double x = s->columnDouble(1), y = s->columnDouble(2), size = s->columnDouble(3),
+                 angle = s->columnDouble(4), response = s->columnDouble(5);
+    if (digest) {
+      const std::string fault = detail::refValueFault(x, y, size, angle, response);
+      if (!fault.empty())
+        detail::refuseDamagedRow(
+            path_, "word_refs",
+            "(" + std::to_string(location_id) + ", " + std::to_string(s->columnInt(6)) + ")",
+            fault);
+      digest->add(s->columnInt(0), x, y, size, angle, response);
+    }
+    result.push_back(WordRef{s->columnInt(0), static_cast<float>(x), static_cast<float>(y),
+                             static_cast<float>(size), static_cast<float>(angle),
+                             static_cast<float>(response)});
   }
   return result;
+}
+
+void SqliteMapStore::requireRefsDigest(std::int64_t location_id,
+                                       const detail::RefsDigest& digest) const {
+  auto s = db_->cached("SELECT refs_digest FROM locations WHERE id = ?1");
+  s->bind(1, location_id);
+  if (!s->step()) {
+    if (digest.count() == 0) return;  // no location, no references: nothing was read
+    detail::refuseDamagedRow(path_, "locations", std::to_string(location_id),
+                             "is missing (its word_refs are read)");
+  }
+  if (!detail::checksumMatches(*s, 0, digest.value()))
+    detail::refuseDamagedRow(path_, "word_refs", "of location " + std::to_string(location_id),
+                             "do not match the location's refs_digest (" +
+                                 std::to_string(digest.count()) +
+                                 " rows: a reference was deleted, added or changed)");
+}
+
+std::vector<WordRef> SqliteMapStore::loadWordRefs(std::int64_t location_id) const {
+  detail::RefsDigest digest(location_id);
+  std::vector<WordRef> refs = readWordRefs(location_id, &digest);
+  requireRefsDigest(location_id, digest);
+  return refs;
 }
 
 std::map<std::int64_t, std::vector<WordRef>> SqliteMapStore::loadWordRefs(
@@ -245,13 +290,12 @@ std::map<std::int64_t, std::vector<WordRef>> SqliteMapStore::loadWordRefs(
 
 std::map<std::int64_t, std::vector<std::int64_t>> SqliteMapStore::loadWordIds(
     const std::vector<std::int64_t>& location_ids) const {
-  auto s = db_->cached("SELECT word_id FROM word_refs WHERE location_id = ?1 ORDER BY ordinal");
+  // The whole references are read, to check them against the location's digest: a signature is
+  // what every later frame is compared with.
   std::map<std::int64_t, std::vector<std::int64_t>> result;
   for (std::int64_t id : location_ids) {
-    s->reset();
-    s->bind(1, id);
     auto& ids = result[id];
-    while (s->step()) ids.push_back(s->columnInt(0));
+    for (const WordRef& r : loadWordRefs(id)) ids.push_back(r.word_id);
   }
   return result;
 }

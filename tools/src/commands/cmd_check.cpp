@@ -16,6 +16,7 @@
 #include "placedb/options.h"
 #include "placedb/storage/map_check.h"
 #include "placedb/storage/map_store.h"
+#include "placedb/storage/migrations.h"
 
 namespace placedb::cli {
 namespace {
@@ -50,6 +51,11 @@ nlohmann::json toJson(const std::string& path, const storage::CheckReport& repor
 
 std::string describe(const std::string& path, const storage::CheckReport& report) {
   std::string text = fmt::format("map {} (schema {})\n", path, report.schema_version);
+  if (report.schema_version < storage::currentSchemaVersion())
+    text += fmt::format(
+        "  schema {} is older than this binary's {}: `map` upgrades it when it first opens it; "
+        "`query`, `info` and the engine's own checks wait until then\n",
+        report.schema_version, storage::currentSchemaVersion());
   text += fmt::format("  pages, indexes and constraints: {}\n",
                       storage::isServerMap(path)
                           ? "the server's (constraints always enforced; pages: data checksums "
@@ -116,8 +122,12 @@ Command addCheckCommand(CLI::App& parent) {
       "  - foreign keys\n"
       "  - the CRC-32C stored beside every word descriptor, place code, engine-state value and\n"
       "    kd-forest node (schema 8), and the recorded number of kd-forest nodes\n"
+      "  - what each location's and session's rows must hold (schema 15): the rows a location\n"
+      "    has, its references against their digest, its links, each session's settings;\n"
+      "    every frame's coverage and hypothesis; the tables against the schema version\n"
       "  - values the engine refuses: non-finite descriptors, negative weights, probabilities\n"
-      "    outside [0, 1], and the engine's own load checks (it opens the map as `query` does)\n"
+      "    outside [0, 1], and the engine's own load checks (it opens the map as `query` does:\n"
+      "    the counters against the rows, the tiers, the posterior)\n"
       "Nothing is written: the map and its -wal file are left as found, and a `placedb map`\n"
       "running on it is not disturbed (the check sees its last committed frame).\n"
       "Progress goes to stderr (-q to silence it). Exit 0 when sound, 4 when damage is found\n"

@@ -5,7 +5,9 @@
 
 #include "commands/commands.h"
 #include "commands/mapping_run.h"
+#include "exit_codes.h"
 #include "frame_log.h"
+#include "interrupt.h"
 #include "map_argument.h"
 #include "settings_input.h"
 #include "sources/live_source.h"
@@ -85,7 +87,9 @@ Command addMapCommand(CLI::App& parent) {
       "keeps at most 300 there and the rest in long-term memory, on disk only.\n\n"
       "The --log CSV has one row per frame processed by this invocation; an existing log is\n"
       "appended to only by a resume of the session that wrote it (another run is exit 2),\n"
-      "after the rows of frames the map lost (and maps again) are cut off. Its columns:\n" +
+      "after the rows of frames the map lost (and maps again) are cut off and the rows of\n"
+      "frames the map holds but the log lacks (a run stopped between the two) written back.\n"
+      "Its columns:\n" +
       logColumnList() +
       "\nWhat each holds, and how closures onto other sessions' frames show: docs/log.md.\n"
       "Frames are named SESSION:INDEX, with @SECONDS.NANOSECONDS when the source stamps them.\n\n"
@@ -138,6 +142,9 @@ Command addMapCommand(CLI::App& parent) {
             if (app->count("--stop-after")) request->stop_after = *stop_after;
             const bool live = isLiveSource(request->source);
             MappingSummary s = runMapping(*request);
+            if (!s.stalled.empty())
+              printWarning(fmt::format("{}: the session is closed, every frame kept (exit {})",
+                                       s.stalled, kExitSourceStalled));
             // Kept under --quiet: one line saying what the run did and what comes next.
             std::fputs(fmt::format("placedb: session {}: {} frames ({} bad, {} of them "
                                    "unreadable{}) in {:.1f} s, {} new locations, accepted loop "
@@ -147,7 +154,7 @@ Command addMapCommand(CLI::App& parent) {
                                    s.seconds, s.locations_created, s.loop_closures, endOfRunText(s))
                            .c_str(),
                        stderr);
-            return 0;
+            return s.stalled.empty() ? kExitOk : kExitSourceStalled;
           }};
 }
 

@@ -1,11 +1,7 @@
 #include <fmt/format.h>
 
-#include <unistd.h>
-
 #include <algorithm>
-#include <cerrno>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 
 #include "commands/commands.h"
@@ -17,6 +13,7 @@
 #include "placedb/storage/map_files.h"
 #include "placedb/storage/map_store.h"
 #include "vocabulary/vocabulary_file.h"
+#include "whole_file.h"
 
 namespace placedb::cli {
 
@@ -73,24 +70,20 @@ vocab::VocabularyData wordsOfMap(const std::string& map_path) {
   return data;
 }
 
+void writeVocabulary(const std::string& file, const vocab::VocabularyData& data, bool text) {
+  // A device is written, a link's target replaced, as every export is.
+  writeWholeFile(file, [&](std::FILE* out) {
+    if (text)
+      vocab::writeVocabularyText(out, data);
+    else
+      vocab::writeVocabularyFile(out, data);
+  });
+}
+
 int runExport(const VocabRequest& request) {
   refuseMapAsOutput("vocab export", request.map_path, request.file);
   vocab::VocabularyData data = wordsOfMap(request.map_path);
-  // A temporary file beside the output, renamed over it once complete: a failed export leaves
-  // neither a partial file nor a damaged older one.
-  const std::string partial = fmt::format("{}.partial-{}", request.file, ::getpid());
-  try {
-    if (request.text)
-      vocab::writeVocabularyText(partial, data);
-    else
-      vocab::writeVocabularyFile(partial, data);
-    if (std::rename(partial.c_str(), request.file.c_str()) != 0)
-      throw Error(ErrorCode::kIo,
-                  fmt::format("cannot write {}: {}", request.file, std::strerror(errno)));
-  } catch (...) {
-    std::remove(partial.c_str());
-    throw;
-  }
+  writeVocabulary(request.file, data, request.text);
   std::fputs(fmt::format("placedb: wrote {} words ({}, dimension {}) to {}\n", data.ids.size(),
                          data.extractor, data.dim, request.file)
                  .c_str(),

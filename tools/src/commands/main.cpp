@@ -6,11 +6,13 @@
 #include <csignal>
 #include <cstdio>
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
 #include "commands/commands.h"
 #include "exit_codes.h"
 #include "features/cpu_support.h"
+#include "map_argument.h"
 #include "placedb/error.h"
 #include "placedb/version.h"
 
@@ -18,7 +20,7 @@ namespace {
 
 using placedb::cli::Command;
 
-int run(int argc, char** argv) {
+int run(std::vector<std::string>& arguments) {
   CLI::App app{fmt::format(
       "placedb {}: appearance-based loop-closure detection with a SQLite map.\n\n"
       "Typical use:\n"
@@ -59,8 +61,10 @@ int run(int argc, char** argv) {
       placedb::cli::addReportCommand(app),   placedb::cli::addCheckCommand(app),
       placedb::cli::addCopyCommand(app)};
 
+  std::vector<char*> argv;
+  for (std::string& argument : arguments) argv.push_back(argument.data());
   try {
-    app.parse(argc, argv);
+    app.parse(static_cast<int>(argv.size()), argv.data());
   } catch (const CLI::ParseError& e) {
     int code = app.exit(e);  // prints help, version or the failure message
     return code == 0 ? placedb::cli::kExitOk : placedb::cli::kExitUsage;
@@ -74,12 +78,16 @@ int run(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   using placedb::cli::printError;
+  // Before anything else runs: the parser reads copies, while the process's own arguments lose
+  // any password a map's URI holds, which ps and /proc/PID/cmdline would show to every user.
+  std::vector<std::string> arguments(argv, argv + argc);
+  placedb::cli::hidePasswordsInArguments(argc, argv);
   // A write past a file-size limit (ulimit -f) then fails with EFBIG and is reported as a full
   // disk, instead of killing the process in the middle of a file.
   std::signal(SIGXFSZ, SIG_IGN);
   try {
     placedb::simdLevel();  // an invalid PLACEDB_SIMD is refused before any file is written
-    return run(argc, argv);
+    return run(arguments);
   } catch (const placedb::Error& e) {
     printError(e.what());
     return placedb::cli::exitCodeFor(e.code());

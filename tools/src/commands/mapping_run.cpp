@@ -13,6 +13,7 @@
 #include "frame_log.h"
 #include "frame_names.h"
 #include "interrupt.h"
+#include "log_recovery.h"
 #include "placedb/map.h"
 #include "placedb/storage/map_store.h"
 #include "progress.h"
@@ -154,19 +155,70 @@ std::string closureLine(const FrameResult& r) {
                                            : std::string());
 }
 
-// The frame log after a reopen: rows of frames the map does not hold are cut off (they are
-// mapped again), as at a resume.
-std::unique_ptr<FrameLogWriter> reopenLog(const MappingRequest& request, std::int64_t session,
-                                          std::int64_t first_index) {
-  if (request.log_path.empty()) return nullptr;
-  const std::vector<std::int64_t> dropped =
+// What the summary counts, frame by frame, so that a frame the map lost and this run maps again
+// (a server's last commits, gone with it in a restart) is counted once.
+class RunTally {
+ public:
+  explicit RunTally(MappingSummary& summary) : summary_(summary) {}
+  void add(std::int64_t index, const FrameResult& r, bool unreadable) {
+    std::uint8_t flags = 0;
+    if (unreadable) flags |= kUnreadable;
+    if (r.outcome == FrameOutcome::kBad) flags |= kBad;
+    if (r.outcome == FrameOutcome::kNewLocation) flags |= kNewLocation;
+    if (r.hypothesis.accepted) flags |= kClosure;
+    frames_.push_back({index, flags});
+    count(flags, 1);
+  }
+  // The map holds no frame from `index` on (a source's indices grow along the run).
+  void forgetFrom(std::int64_t index) {
+    while (!frames_.empty() && frames_.back().first >= index) {
+      count(frames_.back().second, -1);
+      frames_.pop_back();
+    }
+  }
+
+ private:
+  static constexpr std::uint8_t kUnreadable = 1, kBad = 2, kNewLocation = 4, kClosure = 8;
+  void count(std::uint8_t flags, int sign) {
+    summary_.processed += sign;
+    summary_.unreadable += (flags & kUnreadable) ? sign : 0;
+    summary_.bad += (flags & kBad) ? sign : 0;
+    summary_.locations_created += (flags & kNewLocation) ? sign : 0;
+    summary_.loop_closures += (flags & kClosure) ? sign : 0;
+  }
+  MappingSummary& summary_;
+  std::vector<std::pair<std::int64_t, std::uint8_t>> frames_;  // index, flags
+};
+
+// The frame log of a session that goes on from `first_index` (a resume, or a reopen after a lost
+// server): rows of frames the map does not hold are cut off (they are mapped again), and rows of
+// frames the map holds but the log lacks (the run stopped between a frame's commit and its row)
+// are written back from the map. Returns the frames written back.
+std::vector<FrameResult> continueLog(const MappingRequest& request, std::int64_t session,
+                                     std::int64_t first_index,
+                                     std::unique_ptr<FrameLogWriter>& log) {
+  log.reset();
+  if (request.log_path.empty()) return {};
+  const FrameLogWriter::CutBack cut =
       FrameLogWriter::cutBack(request.log_path, session, first_index);
-  if (!dropped.empty())
+  if (!cut.dropped.empty())
     printWarning(
         fmt::format("log {}: dropped the rows of frames {}-{}, which the map lost "
                     "(they are mapped again)",
-                    request.log_path, dropped.front(), dropped.back()));
-  return std::make_unique<FrameLogWriter>(request.log_path);
+                    request.log_path, cut.dropped.front(), cut.dropped.back()));
+  log = std::make_unique<FrameLogWriter>(request.log_path);
+  // Standard output cannot be read back: what its reader got is unknown.
+  if (request.log_path == kStandardOutput.string()) return {};
+  std::vector<FrameResult> missing =
+      framesFromMap(request.map_path, session, cut.last_kept, first_index);
+  for (const FrameResult& r : missing) log->writeFromMap(r);
+  if (!missing.empty())
+    printWarning(fmt::format(
+        "log {}: wrote back from the map the rows of frame{} {}{}, which the map holds and the "
+        "log lacked (the run stopped between a frame's commit and its row)",
+        request.log_path, missing.size() == 1 ? "" : "s", missing.front().source_index,
+        missing.size() == 1 ? "" : fmt::format("-{}", missing.back().source_index)));
+  return missing;
 }
 
 // After the connection to a map's server was lost mid-run (a restart, the network): waits up to
@@ -297,18 +349,10 @@ MappingSummary runOnce(const MappingRequest& request, std::chrono::steady_clock:
       throw OpeningLost{e.what()};
     throw;
   }
-  if (!request.log_path.empty()) {
-    if (resume) {
-      const std::vector<std::int64_t> dropped =
-          FrameLogWriter::cutBack(request.log_path, summary.session_id, summary.first_index);
-      if (!dropped.empty())
-        printWarning(
-            fmt::format("log {}: dropped the rows of frames {}-{}, which the map lost "
-                        "(they are mapped again)",
-                        request.log_path, dropped.front(), dropped.back()));
-    }
+  if (resume)
+    continueLog(request, summary.session_id, summary.first_index, log);
+  else if (!request.log_path.empty())
     log = std::make_unique<FrameLogWriter>(request.log_path);
-  }
   if (!request.quiet)
     std::fputs(
         fmt::format("placedb: {} session {} of {} over {} {} from frame {}\n",
@@ -327,6 +371,7 @@ MappingSummary runOnce(const MappingRequest& request, std::chrono::steady_clock:
   if (!request.quiet)
     progress = std::make_unique<ProgressReporter>(remaining, ProgressReporter::stderrIsTerminal());
 
+  RunTally tally(summary);
   SourceFrame frame;
   while (true) {
     if (interruptRequested()) {
@@ -338,7 +383,10 @@ MappingSummary runOnce(const MappingRequest& request, std::chrono::steady_clock:
       break;
     }
     if (!source->read(frame)) {
-      summary.reached_end = true;
+      // A live source's wait for its next frame ends on Ctrl-C too: that is a stop, not its end.
+      summary.interrupted = interruptRequested();
+      summary.stalled = summary.interrupted ? std::string() : source->endProblem();
+      summary.reached_end = !summary.interrupted && summary.stalled.empty();
       break;
     }
     FrameResult result;
@@ -363,34 +411,22 @@ MappingSummary runOnce(const MappingRequest& request, std::chrono::steady_clock:
       map = std::move(reopened.first);
       const auto& last = reopened.second.last_source_index;
       const std::int64_t next = last ? *last + 1 : 0;
-      if (next > frame.index) {
-        // The server committed the frame as the connection went: the map has it, its row
-        // never reached the log.
-        ++summary.processed;
-        if (!request.log_path.empty())
-          printWarning(
-              fmt::format("log {}: no row for frame {}, which the server committed as "
-                          "the connection was lost",
-                          request.log_path, frame.index));
-      }
+      // Frames the map lost with the server's last commits are mapped again (and counted once);
+      // one the server committed as the connection went is in the map, its row written back.
+      tally.forgetFrom(next);
       summary.next_index = next;
       if (source->kind() != "live") source->seek(next);
-      log = reopenLog(request, summary.session_id, next);
+      for (const FrameResult& r : continueLog(request, summary.session_id, next, log))
+        if (r.source_index >= summary.first_index) tally.add(r.source_index, r, false);
       printNote(fmt::format("the server is back: session {} goes on from frame {}",
                             summary.session_id, next));
       continue;
     }
-    if (frame.image.empty()) ++summary.unreadable;
-    ++summary.processed;
+    tally.add(frame.index, result, frame.image.empty());
     summary.next_index = frame.index + 1;
-    if (result.outcome == FrameOutcome::kNewLocation) ++summary.locations_created;
-    if (result.outcome == FrameOutcome::kBad) ++summary.bad;
-    if (result.hypothesis.accepted) {
-      ++summary.loop_closures;
-      if (progress) {
-        progress->clearLine();
-        std::fputs(closureLine(result).c_str(), stderr);
-      }
+    if (result.hypothesis.accepted && progress) {
+      progress->clearLine();
+      std::fputs(closureLine(result).c_str(), stderr);
     }
     if (log) log->write(result);
     if (request.on_frame) request.on_frame(frame, result);
@@ -424,9 +460,11 @@ MappingSummary runOnce(const MappingRequest& request, std::chrono::steady_clock:
 }  // namespace
 
 std::string endOfRunText(const MappingSummary& s) {
-  if (s.live) return s.interrupted ? "interrupted; the session is closed" : "end of source";
+  const std::string signal = fmt::format("stopped by {}", interruptSignalName());
+  if (!s.stalled.empty()) return "stalled: the stream sent nothing";
+  if (s.live) return s.interrupted ? signal + "; the session is closed" : "end of source";
   if (s.reached_end) return "end of source";
-  const char* why = s.interrupted ? "interrupted" : "stopped by --stop-after";
+  const std::string why = s.interrupted ? signal : "stopped by --stop-after";
   if (!s.source_size)
     return fmt::format(
         "{}; the source's length is unknown, so the next `placedb map` over it starts a new "

@@ -55,9 +55,10 @@ struct MappingSummary {
   std::int64_t loop_closures = 0;  // frames whose loop-closure hypothesis was accepted
   std::int64_t locations_created = 0;
   std::int64_t dropped = 0;     // a live source's frames that arrived while the engine was busy
-  bool interrupted = false;     // Ctrl-C / SIGTERM
+  bool interrupted = false;     // Ctrl-C / SIGTERM / SIGHUP
   bool stopped_early = false;   // --stop-after
   bool reached_end = false;     // the source has no frame left
+  std::string stalled;          // a live source that stopped sending: why ("" otherwise)
   bool live = false;            // a camera or stream: never resumed
   std::int64_t next_index = 0;  // the first frame of the source not mapped
   std::optional<std::int64_t> source_size;  // frames in the source, when known

@@ -16,6 +16,9 @@ struct VocabRequest {
 // Every word stored in the map (all memory tiers), ascending ids, with the last session's
 // settings: the extractor and distance unit the words were made with.
 vocab::VocabularyData wordsOfMap(const std::string& map_path);
+// Writes `data` to `file` through the one writer of whole files (whole_file.h): placedb's binary
+// format, or with `text` RTAB-Map's dictionary.
+void writeVocabulary(const std::string& file, const vocab::VocabularyData& data, bool text);
 // Writes every word of request.map_path to request.file.
 int runExport(const VocabRequest& request);
 // Starts request.map_path (new, or without frames and words) from request.file's words; a map

@@ -11,7 +11,7 @@
 #include "frame_names.h"
 #include "placedb/error.h"
 #include "placedb/storage/map_store.h"
-#include "text_file.h"
+#include "whole_file.h"
 
 namespace placedb::cli {
 namespace {
@@ -120,7 +120,7 @@ void writeCsv(const MapGraph& graph, const std::filesystem::path& folder) {
   for (const auto& l : graph.locations)
     locations += fmt::format("{},{},{},{},{},{},{}\n", l.id, l.session_id, l.tier, l.weight,
                              framesText(l), stampsText(l), poseFields(l.pose));
-  writeTextFile(locations_path, locations);
+  writeWholeFile(locations_path, locations);
 
   const auto links_path = folder / "links.csv";
   std::string links;
@@ -141,7 +141,7 @@ void writeCsv(const MapGraph& graph, const std::filesystem::path& folder) {
     links += fmt::format("{},{},{},{},{},{}\n", k.location_a, k.location_b, k.type, scoreText(k),
                          closure && !k.pose ? 1 : 0, pose);
   }
-  writeTextFile(links_path, links);
+  writeWholeFile(links_path, links);
 }
 
 void writeGraphml(const MapGraph& graph, const std::filesystem::path& path) {
@@ -205,7 +205,7 @@ void writeGraphml(const MapGraph& graph, const std::filesystem::path& path) {
                        k.location_b, data);
   }
   out += "  </graph>\n</graphml>\n";
-  writeTextFile(path, out);
+  writeWholeFile(path, out);
 }
 
 void writeG2o(const MapGraph& graph, const std::filesystem::path& path) {
@@ -256,7 +256,7 @@ void writeG2o(const MapGraph& graph, const std::filesystem::path& path) {
                          k.pose ? rotation_only : information);
     }
   }
-  writeTextFile(path, out);
+  writeWholeFile(path, out);
 }
 
 }  // namespace

@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <opencv2/imgcodecs.hpp>
+#include <string>
+#include <vector>
 
 #include "placedb/error.h"
+#include "whole_file.h"
 
 namespace placedb::cli {
 namespace {
@@ -47,14 +50,16 @@ WrittenPlot writeLoopMatrix(const Evaluation& evaluation, const GroundTruth& gt,
     for (std::int64_t c : f.candidates)
       mark(f.frame, c, !judged ? kYellow : f.correct ? kGreen : kRed);
   }
-  const auto path = folder / "loop_matrix.png";
-  bool written = false;
+  std::vector<unsigned char> png;
+  bool encoded = false;
   try {
-    written = cv::imwrite(path.string(), image);
+    encoded = cv::imencode(".png", image, png);
   } catch (const cv::Exception&) {
-    written = false;
+    encoded = false;
   }
-  if (!written) throw Error(ErrorCode::kIo, "cannot write " + path.string());
+  const auto path = folder / "loop_matrix.png";
+  if (!encoded) throw Error(ErrorCode::kIo, "cannot write " + path.string());
+  writeWholeFile(path, std::string(png.begin(), png.end()));
   if (!judged)
     return {"loop_matrix.png",
             "the closures the engine accepted: frame down, the frame it closed on across, in "

@@ -6,10 +6,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <iterator>
 
 #include "placedb/error.h"
+#include "whole_file.h"
 
 namespace placedb::cli {
 namespace fs = std::filesystem;
@@ -57,11 +59,15 @@ Range rangeOf(const std::vector<double>& values, bool from_zero) {
 
 class Figure {
  public:
-  Figure(const fs::path& file, Range x, Range y, const std::string& xlabel,
-         const std::string& ylabel, const std::string& title) {
+  // The destructor puts the PNG on `out`. PLplot closes the stream it draws on, so it draws on
+  // one in memory of its own.
+  Figure(std::FILE* out, Range x, Range y, const std::string& xlabel, const std::string& ylabel,
+         const std::string& title)
+      : out_(out), drawn_(open_memstream(&png_, &png_size_)) {
+    if (!drawn_) throw Error(ErrorCode::kInternal, "plotting: no memory for a figure");
     plsexit(onPlplotExit);
     plsdev("pngcairo");
-    plsfnam(file.string().c_str());
+    plsfile(drawn_);
     plsetopt("geometry", "960x540");
     plscolbg(255, 255, 255);
     plinit();
@@ -81,7 +87,11 @@ class Figure {
     plenv(x.lo, x.hi, y.lo, y.hi, 0, 2);  // 2: axes with a grid
     pllab(xlabel.c_str(), ylabel.c_str(), title.c_str());
   }
-  ~Figure() { plend(); }
+  ~Figure() {
+    plend();  // writes the PNG and closes drawn_
+    if (png_) std::fwrite(png_, 1, png_size_, out_);
+    std::free(png_);
+  }
   Figure(const Figure&) = delete;
   Figure& operator=(const Figure&) = delete;
 
@@ -191,13 +201,20 @@ class Figure {
     plpsty(0);
     plfill(4, xs.data(), ys.data());
   }
+
+  std::FILE* out_;
+  char* png_ = nullptr;
+  std::size_t png_size_ = 0;
+  std::FILE* drawn_;
 };
 
 bool seriesPlot(const fs::path& folder, const std::string& file, const std::vector<double>& x,
                 const std::vector<double>& y, const std::string& ylabel, const std::string& title) {
   if (y.empty() || x.size() != y.size()) return false;
-  Figure figure(folder / file, rangeOf(x, false), rangeOf(y, true), "frame", ylabel, title);
-  figure.line(x, y, kBlue);
+  writeWholeFile(folder / file, [&](std::FILE* out) {
+    Figure figure(out, rangeOf(x, false), rangeOf(y, true), "frame", ylabel, title);
+    figure.line(x, y, kBlue);
+  });
   return true;
 }
 
@@ -234,26 +251,28 @@ bool precisionRecallPlot(const fs::path& folder, const Evaluation& evaluation) {
   // The legend sits in the bottom left corner, where a precision-recall curve seldom goes.
   Range y = percentRange(all_precision);
   y.lo -= 0.15 * (y.hi - y.lo);
-  Figure figure(folder / "precision_recall.png", percentRange(all_recall), y, "recall (%)",
-                "precision (%)", "Precision-recall over score thresholds");
-  figure.line(recall, precision, kBlue);
-  figure.points(recall, precision, kBlue, 17);
-  std::vector<std::pair<Colour, std::string>> legend = {{kBlue, "curve over score thresholds"}};
-  if (has_r100) {
-    figure.points({f.recall_at_100_precision}, {100.0}, kGreen, 11, 2.5);
-    legend.push_back({kGreen, fmt::format("R@100P (window {}): {:.2f}% recall at 100% precision",
-                                          f.window, f.recall_at_100_precision)});
-  }
-  if (has_operating) {
-    figure.points({*f.accepted_recall}, {*f.accepted_precision}, kRed, 4, 2.5);
-    legend.push_back({kRed, fmt::format("accepted: precision {:.2f}%, recall {:.2f}% ({} right, "
-                                        "{} wrong)",
-                                        *f.accepted_precision, *f.accepted_recall, f.accepted_true,
-                                        f.accepted_false)});
-  } else {
-    legend.push_back({kRed, "accepted: none"});
-  }
-  figure.legend(legend, true);
+  writeWholeFile(folder / "precision_recall.png", [&](std::FILE* out) {
+    Figure figure(out, percentRange(all_recall), y, "recall (%)", "precision (%)",
+                  "Precision-recall over score thresholds");
+    figure.line(recall, precision, kBlue);
+    figure.points(recall, precision, kBlue, 17);
+    std::vector<std::pair<Colour, std::string>> legend = {{kBlue, "curve over score thresholds"}};
+    if (has_r100) {
+      figure.points({f.recall_at_100_precision}, {100.0}, kGreen, 11, 2.5);
+      legend.push_back({kGreen, fmt::format("R@100P (window {}): {:.2f}% recall at 100% precision",
+                                            f.window, f.recall_at_100_precision)});
+    }
+    if (has_operating) {
+      figure.points({*f.accepted_recall}, {*f.accepted_precision}, kRed, 4, 2.5);
+      legend.push_back({kRed, fmt::format("accepted: precision {:.2f}%, recall {:.2f}% ({} right, "
+                                          "{} wrong)",
+                                          *f.accepted_precision, *f.accepted_recall,
+                                          f.accepted_true, f.accepted_false)});
+    } else {
+      legend.push_back({kRed, "accepted: none"});
+    }
+    figure.legend(legend, true);
+  });
   return true;
 }
 
@@ -272,30 +291,32 @@ bool scorePlot(const fs::path& folder, const RunSeries& s) {
   if (s.score.empty() || s.score.size() != s.frame.size()) return false;
   Range y = rangeOf(s.score, true);
   y.hi = std::max(y.hi, 1.0) * 1.45;  // headroom for the legend
-  Figure figure(folder / "score.png", rangeOf(s.frame, false), y, "frame", "loop-closure score",
-                "Best hypothesis' score per frame");
-  if (!s.judged) {
+  writeWholeFile(folder / "score.png", [&](std::FILE* out) {
+    Figure figure(out, rangeOf(s.frame, false), y, "frame", "loop-closure score",
+                  "Best hypothesis' score per frame");
+    if (!s.judged) {
+      figure.line(s.frame, s.score, kBlue);
+      figure.points(s.accepted_wrong, scoresAt(s, s.accepted_wrong), kPurple, 4);
+      figure.legend({{kBlue, "score"},
+                     {kPurple, fmt::format("accepted closure, no ground truth to judge it ({})",
+                                           s.accepted_wrong.size())}});
+      return;
+    }
+    // Two bands along the bottom: every ground-truth loop frame (grey), and under it those the
+    // engine missed (orange), so a gap in the orange band is a loop found.
+    const double tick = 0.04 * (y.hi - y.lo);
+    figure.rug(s.gt_loop_frames, y.lo + tick, y.lo + 2 * tick, kGrey);
+    figure.rug(s.missed_loops, y.lo, y.lo + tick, kOrange);
     figure.line(s.frame, s.score, kBlue);
-    figure.points(s.accepted_wrong, scoresAt(s, s.accepted_wrong), kPurple, 4);
-    figure.legend({{kBlue, "score"},
-                   {kPurple, fmt::format("accepted closure, no ground truth to judge it ({})",
-                                         s.accepted_wrong.size())}});
-    return true;
-  }
-  // Two bands along the bottom: every ground-truth loop frame (grey), and under it those the
-  // engine missed (orange), so a gap in the orange band is a loop found.
-  const double tick = 0.04 * (y.hi - y.lo);
-  figure.rug(s.gt_loop_frames, y.lo + tick, y.lo + 2 * tick, kGrey);
-  figure.rug(s.missed_loops, y.lo, y.lo + tick, kOrange);
-  figure.line(s.frame, s.score, kBlue);
-  figure.points(s.accepted_right, scoresAt(s, s.accepted_right), kGreen, 4);
-  figure.points(s.accepted_wrong, scoresAt(s, s.accepted_wrong), kRed, 5, 1.6);
-  figure.legend(
-      {{kBlue, "score"},
-       {kGreen, fmt::format("right accepted closure ({})", s.accepted_right.size())},
-       {kRed, fmt::format("wrong accepted closure ({})", s.accepted_wrong.size())},
-       {kGrey, fmt::format("ground-truth loop frame ({})", s.gt_loop_frames.size())},
-       {kOrange, fmt::format("missed loop: no right closure ({})", s.missed_loops.size())}});
+    figure.points(s.accepted_right, scoresAt(s, s.accepted_right), kGreen, 4);
+    figure.points(s.accepted_wrong, scoresAt(s, s.accepted_wrong), kRed, 5, 1.6);
+    figure.legend(
+        {{kBlue, "score"},
+         {kGreen, fmt::format("right accepted closure ({})", s.accepted_right.size())},
+         {kRed, fmt::format("wrong accepted closure ({})", s.accepted_wrong.size())},
+         {kGrey, fmt::format("ground-truth loop frame ({})", s.gt_loop_frames.size())},
+         {kOrange, fmt::format("missed loop: no right closure ({})", s.missed_loops.size())}});
+  });
   return true;
 }
 
@@ -313,20 +334,21 @@ bool stagePlot(const fs::path& folder, const RunSeries& s) {
   }
   Range y = rangeOf(sums.back(), true);
   y.hi += 0.06 * static_cast<double>(stages.size()) * (y.hi - y.lo);  // room for the legend
-  Figure figure(folder / "time_by_stage.png", rangeOf(s.frame, false), y, "frame", "ms",
-                "Time per frame by stage");
-  static const Colour kStageColours[] = {kBlue,  kOrange, kGreen, kRed, kPurple,
-                                         kBrown, kPink,   kOlive, kCyan};
-  const std::vector<double> zero(s.frame.size(), 0.0);
-  std::vector<std::pair<Colour, std::string>> legend;
-  for (std::size_t k = 0; k < stages.size(); ++k) {
-    const Colour colour = kStageColours[k % std::size(kStageColours)];
-    figure.band(s.frame, k == 0 ? zero : sums[k - 1], sums[k], colour);
-    legend.push_back({colour, stages[k]->name});
-  }
-  // Top of the stack first, as the bands are piled.
-  std::reverse(legend.begin(), legend.end());
-  figure.legend(legend);
+  writeWholeFile(folder / "time_by_stage.png", [&](std::FILE* out) {
+    Figure figure(out, rangeOf(s.frame, false), y, "frame", "ms", "Time per frame by stage");
+    static const Colour kStageColours[] = {kBlue,  kOrange, kGreen, kRed, kPurple,
+                                           kBrown, kPink,   kOlive, kCyan};
+    const std::vector<double> zero(s.frame.size(), 0.0);
+    std::vector<std::pair<Colour, std::string>> legend;
+    for (std::size_t k = 0; k < stages.size(); ++k) {
+      const Colour colour = kStageColours[k % std::size(kStageColours)];
+      figure.band(s.frame, k == 0 ? zero : sums[k - 1], sums[k], colour);
+      legend.push_back({colour, stages[k]->name});
+    }
+    // Top of the stack first, as the bands are piled.
+    std::reverse(legend.begin(), legend.end());
+    figure.legend(legend);
+  });
   return true;
 }
 }  // namespace

@@ -15,14 +15,14 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "base64.h"
 #include "frame_log.h"
 #include "placedb/error.h"
 #include "placedb/storage/map_store.h"
-#include "report/base64.h"
 #include "report/evaluation_run.h"
 #include "report/report_page.h"
 #include "sources/image_source.h"
-#include "text_file.h"
+#include "whole_file.h"
 
 namespace placedb::cli {
 namespace fs = std::filesystem;
@@ -372,7 +372,7 @@ ReportSummary writeReport(const ReportRequest& request) {
     throw Error(ErrorCode::kIo,
                 fmt::format("cannot create {}: {}", request.out.string(), ec.message()));
   summary.page = request.out / "index.html";
-  writeTextFile(summary.page, reportHtml(page));
+  writeWholeFile(summary.page, reportHtml(page));
   summary.figures = page.plots.size();
   summary.wrong_shown = page.wrong.size();
   summary.right_shown = page.right.size();

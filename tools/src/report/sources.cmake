@@ -6,7 +6,6 @@ target_sources(placedb_cli PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/plots.cpp
   ${CMAKE_CURRENT_LIST_DIR}/loop_matrix.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_series.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/base64.cpp
   ${CMAKE_CURRENT_LIST_DIR}/report.cpp
   ${CMAKE_CURRENT_LIST_DIR}/report_page.cpp
   ${CMAKE_CURRENT_LIST_DIR}/graph_export.cpp

@@ -53,6 +53,9 @@ class ImageSource {
   virtual bool read(SourceFrame& frame) = 0;
   // Frames a live source dropped because they arrived while the engine was busy.
   virtual std::int64_t dropped() const { return 0; }
+  // After read() returned false: why the source ended other than at its end (a live stream
+  // that sent nothing for its read timeout), or "".
+  virtual std::string endProblem() const { return ""; }
   // Folder entries that are not images, skipped.
   virtual std::vector<std::string> skippedFiles() const { return {}; }
   // What the source holds, short: "paths:N:HASH" (FNV-1a 64 of the image paths in order) for a

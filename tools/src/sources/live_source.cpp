@@ -13,13 +13,16 @@
 #include <cstring>
 #include <filesystem>
 #include <mutex>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 #include <opencv2/videoio/registry.hpp>
 #include <regex>
 #include <thread>
 
+#include "features/image_conversion.h"
 #include "interrupt.h"
 #include "placedb/error.h"
+#include "sources/mjpeg_stream.h"
 
 namespace placedb::cli {
 namespace {
@@ -71,6 +74,35 @@ std::string whyNotOpened(const std::string& source) {
       kOpenTimeoutMs / 1000);
 }
 
+// What the grabber last brought: an image FFmpeg decoded, or an MJPEG part's bytes (decoded when
+// taken, so that parts dropped while the engine is busy cost nothing), or why there is none.
+struct Arrival {
+  cv::Mat image;
+  std::string bytes;
+  std::string problem;
+};
+
+// An image from a part's bytes, or why there is none; its header is judged before decoding.
+cv::Mat decodePart(const std::string& bytes, std::string& problem) {
+  const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
+  if (const auto size = readImageDimensions(data, bytes.size());
+      size && !withinImageLimits(*size)) {
+    problem = imageLimitProblem(*size);
+    return cv::Mat();
+  }
+  cv::Mat image;
+  try {
+    image = cv::imdecode(
+        cv::Mat(1, static_cast<int>(bytes.size()), CV_8U, const_cast<unsigned char*>(data)),
+        cv::IMREAD_COLOR);
+  } catch (const cv::Exception&) {
+    image = cv::Mat();
+  }
+  if (image.empty())
+    problem = fmt::format("a stream part of {} bytes that is no image", bytes.size());
+  return image;
+}
+
 class LiveSource : public ImageSource {
  public:
   LiveSource(const std::string& source, double max_fps) : name_(source), max_fps_(max_fps) {
@@ -78,18 +110,23 @@ class LiveSource : public ImageSource {
     std::smatch m;
     const std::string text = source;
     bool opened = false;
-    if (std::regex_match(text, m, std::regex("camera:([0-9]+)")))
+    if (std::regex_match(text, m, std::regex("camera:([0-9]+)"))) {
       opened = capture_.open(std::stoi(m[1]), cv::CAP_V4L2);
-    else if (text.rfind("/dev/", 0) == 0)
+    } else if (text.rfind("/dev/", 0) == 0) {
       opened = capture_.open(text, cv::CAP_V4L2);
-    else  // bounded waits: a stalled stream ends the source instead of hanging Ctrl-C's close
-      opened = capture_.open(text, cv::CAP_FFMPEG,
-                             {cv::CAP_PROP_OPEN_TIMEOUT_MSEC, kOpenTimeoutMs,
-                              cv::CAP_PROP_READ_TIMEOUT_MSEC, kReadTimeoutMs});
+    } else {
+      // An MJPEG stream over HTTP is read part by part (mjpeg_stream.h); anything else, and
+      // every other stream, through FFmpeg, with bounded waits so that a stalled stream ends
+      // instead of hanging Ctrl-C's close.
+      mjpeg_ = MjpegHttpStream::open(text, kOpenTimeoutMs, kReadTimeoutMs, stop_);
+      opened = mjpeg_ || capture_.open(text, cv::CAP_FFMPEG,
+                                       {cv::CAP_PROP_OPEN_TIMEOUT_MSEC, kOpenTimeoutMs,
+                                        cv::CAP_PROP_READ_TIMEOUT_MSEC, kReadTimeoutMs});
+    }
     if (!opened)
       throw Error(ErrorCode::kIo,
                   fmt::format("cannot open live source {}: {}", source, whyNotOpened(text)));
-    grabber_ = std::thread([this] { grab(); });
+    grabber_ = std::thread([this] { mjpeg_ ? grabParts() : grabFrames(); });
   }
   ~LiveSource() override {
     stop_ = true;
@@ -105,6 +142,12 @@ class LiveSource : public ImageSource {
     std::lock_guard<std::mutex> lock(mutex_);
     return arrived_ - taken_ - (fresh_ ? 1 : 0);
   }
+  std::string endProblem() const override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return stalled_
+               ? fmt::format("live source {} sent nothing for {} s", name_, kReadTimeoutMs / 1000)
+               : std::string();
+  }
 
   bool read(SourceFrame& frame) override {
     if (max_fps_ > 0 && taken_ > 0) {
@@ -114,47 +157,77 @@ class LiveSource : public ImageSource {
         std::this_thread::sleep_for(
             std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(20)));
     }
-    std::unique_lock<std::mutex> lock(mutex_);
-    // Waits in short steps so that Ctrl-C ends a wait for a camera that stopped sending.
-    while (!fresh_ && !ended_ && !interruptRequested())
-      arrived_cv_.wait_for(lock, std::chrono::milliseconds(100));
-    if (!fresh_) return false;
-    frame.index = taken_++;
+    Arrival arrival;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      // Waits in short steps so that Ctrl-C ends a wait for a camera that stopped sending.
+      while (!fresh_ && !ended_ && !interruptRequested())
+        arrived_cv_.wait_for(lock, std::chrono::milliseconds(100));
+      if (!fresh_) return false;
+      frame.index = taken_++;
+      arrival = std::move(latest_);
+      latest_ = Arrival();
+      fresh_ = false;
+    }
     frame.path = framePathInSource(name_, "", frame.index);
-    frame.image = latest_;
-    frame.problem = latest_.empty() ? "empty frame" : "";
+    frame.problem = arrival.problem;
+    frame.image = arrival.bytes.empty() ? arrival.image : decodePart(arrival.bytes, frame.problem);
+    if (frame.image.empty() && frame.problem.empty()) frame.problem = "empty frame";
     frame.stamp_ns = std::nullopt;
-    latest_ = cv::Mat();
-    fresh_ = false;
     last_taken_ = Clock::now();
     return true;
   }
 
  private:
-  void grab() {
-    cv::Mat image;
-    while (!stop_) {
-      if (!capture_.read(image) || image.empty()) break;
-      std::lock_guard<std::mutex> lock(mutex_);
-      latest_ = image.clone();  // the previous one, if not taken, is dropped
-      fresh_ = true;
-      ++arrived_;
-      arrived_cv_.notify_one();
-    }
+  void arrive(Arrival arrival) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    latest_ = std::move(arrival);  // the previous one, if not taken, is dropped
+    fresh_ = true;
+    ++arrived_;
+    arrived_cv_.notify_one();
+  }
+  void end(bool stalled) {
     std::lock_guard<std::mutex> lock(mutex_);
     ended_ = true;
+    stalled_ = stalled && !stop_;
     arrived_cv_.notify_one();
+  }
+
+  void grabFrames() {
+    cv::Mat image;
+    while (!stop_) {
+      const auto asked = Clock::now();
+      if (!capture_.read(image) || image.empty()) {
+        // FFmpeg gives up on a silent stream after its read timeout; an end comes sooner.
+        const auto waited =
+            std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - asked);
+        return end(waited.count() >= kReadTimeoutMs - 500);
+      }
+      arrive({image.clone(), {}, {}});
+    }
+    end(false);
+  }
+
+  void grabParts() {
+    while (!stop_) {
+      StreamPart part;
+      const StreamNext next = mjpeg_->next(part);
+      if (next != StreamNext::kPart) return end(next == StreamNext::kStalled);
+      arrive({cv::Mat(), std::move(part.bytes), std::move(part.problem)});
+    }
+    end(false);
   }
 
   std::string name_;
   double max_fps_;
   cv::VideoCapture capture_;
+  std::unique_ptr<MjpegHttpStream> mjpeg_;
   std::thread grabber_;
   std::atomic<bool> stop_{false};
   mutable std::mutex mutex_;
   std::condition_variable arrived_cv_;
-  cv::Mat latest_;
-  bool fresh_ = false, ended_ = false;
+  Arrival latest_;
+  bool fresh_ = false, ended_ = false, stalled_ = false;
   std::int64_t arrived_ = 0, taken_ = 0;
   Clock::time_point last_taken_;
 };

@@ -6,4 +6,5 @@ target_sources(placedb_cli PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/bag_source.cpp
   ${CMAKE_CURRENT_LIST_DIR}/ros1_bag.cpp
   ${CMAKE_CURRENT_LIST_DIR}/ros2_bag.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/live_source.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/live_source.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/mjpeg_stream.cpp)

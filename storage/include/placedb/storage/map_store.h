@@ -38,6 +38,11 @@ struct OpenOptions {
   // is rolled back, exit 4) and on `sqlite3 MAP 'pragma quick_check'`. 0 checks every size.
   // (SQLite only: a PostgreSQL server checks its own pages.)
   std::int64_t integrity_check_max_bytes = std::int64_t{256} << 20;
+  // A read-only open (SQLite) of a map up to integrity_check_max_bytes also looks up every
+  // foreign key (PRAGMA foreign_key_check), as a read-write open does with its page check: the
+  // engine asks for it when it opens a map to answer queries, so that a map `map` refuses is
+  // not answered from either. (A server enforces its keys itself.)
+  bool check_references = false;
   // PostgreSQL: how long connecting may take before kServerUnreachable.
   int connect_timeout_s = 10;
   // PostgreSQL: a read-write open when another writer holds the map's main line opens anyway,
@@ -304,6 +309,14 @@ class MapStore {
   virtual void setWmAges(const std::vector<std::pair<std::int64_t, std::int64_t>>& ages) = 0;
   // Every location's age; its id where none was stored (maps made before schema 4).
   virtual std::map<std::int64_t, std::int64_t> wmAges() const = 0;
+
+  // Whether every location holds the rows it must (schema 15, locations.held: its place code,
+  // word descriptors, keypoint descriptors and WM age row) and no others, a valid tier and its
+  // row's checksum, and every session its settings (settings_digest).
+  // Throws kMapRefused naming the table and row. The engine runs it when it opens a map: a scan
+  // of locations and key lookups, no BLOB read. (A location's references are checked against its
+  // refs_digest whenever they are read.)
+  virtual void checkStoredRows() const = 0;
 
   // Vocabulary imports. imported_at is set to now when empty.
   virtual std::int64_t recordVocabularyImport(const VocabularyImportRecord& import) = 0;

@@ -102,6 +102,14 @@ struct LocationWordDescriptors {
   bool decode(std::int64_t location, int dimension, const std::uint8_t* data, std::size_t size);
 };
 
+// The engine_state key of a location's keypoint descriptors, "keypoint_descriptors/<id>": a row
+// the location holds (schema 15, locations.held), so storage names it; the engine writes it
+// (engine/src/map/state_keys.h).
+inline constexpr const char* kLocationKeypointsKeyPrefix = "keypoint_descriptors/";
+std::string locationKeypointsKey(std::int64_t location_id);
+// The location a key of that form names; none for any other key.
+std::optional<std::int64_t> locationOfKeypointsKey(const std::string& key);
+
 struct WordRef {  // one keypoint of a location's signature quantised to a word
   std::int64_t word_id = 0;
   float x = 0, y = 0, size = 0, angle = 0, response = 0;

@@ -10,6 +10,9 @@
 #include "placedb/storage/map_store.h"
 
 namespace placedb::storage {
+namespace detail {
+class RefsDigest;
+}
 
 namespace detail {
 class Database;
@@ -142,6 +145,7 @@ class SqliteMapStore final : public MapStore {
   std::vector<PlaceCodeRecord> placeCodes() const override;  // by location id
   std::optional<std::vector<std::int8_t>> placeCode(std::int64_t location_id) const override;
   void setWmAges(const std::vector<std::pair<std::int64_t, std::int64_t>>& ages) override;
+  void checkStoredRows() const override;
   // Every location's age; its id where none was stored (maps made before schema 4).
   std::map<std::int64_t, std::int64_t> wmAges() const override;
 
@@ -172,6 +176,17 @@ class SqliteMapStore final : public MapStore {
 
  private:
   void requireWritable() const;
+  // A map small enough for the page check gets the whole-map checks of rows against each other
+  // with it (placedb check's): foreign keys, every location's references against their digest,
+  // every frame's coverage and hypothesis. Throws kMapRefused naming the first damaged row.
+  void checkRowsAgree(const std::string& path) const;
+  // Sets (or clears) one of a location's held bits (location_rows.h).
+  void markHeld(std::int64_t location_id, std::int64_t bit, bool held);
+  // A location's references in ordinal order; with `digest`, each keypoint's values are checked
+  // (kMapRefused) and added to it.
+  std::vector<WordRef> readWordRefs(std::int64_t location_id, detail::RefsDigest* digest) const;
+  // Refuses the map unless `digest` (the references just read) is the location's refs_digest.
+  void requireRefsDigest(std::int64_t location_id, const detail::RefsDigest& digest) const;
   detail::WriteScope writeScope();
   // kd_nodes' row count as the map recorded it (engine_state); refuses the map when damaged.
   std::int64_t storedKdNodeRows() const;
