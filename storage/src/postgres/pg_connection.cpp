@@ -125,6 +125,19 @@ std::string firstLine(const char* message) {
 
 }  // namespace
 
+ErrorCode errorCodeForFailure(const std::string& sqlstate, const std::string& message,
+                              bool connection_ok) {
+  if (!sqlstate.empty()) return errorCodeForSqlState(sqlstate);
+  // libpq's wordings of a connection that went (fe-misc.c, fe-exec.c, fe-protocol3.c).
+  static const char* const kLost[] = {
+      "server closed the connection unexpectedly", "no connection to the server",
+      "could not receive data from server", "could not send data to server",
+      "connection to server was lost"};
+  bool lost = !connection_ok;
+  for (const char* phrase : kLost) lost = lost || message.find(phrase) != std::string::npos;
+  return lost ? ErrorCode::kServerUnreachable : ErrorCode::kStorage;
+}
+
 ErrorCode errorCodeForSqlState(const std::string& state) {
   if (state.rfind("08", 0) == 0 || state == "57P01" || state == "57P02" || state == "57P03")
     return ErrorCode::kServerUnreachable;
@@ -441,8 +454,7 @@ void PgConnection::fail(PGresult* result, const std::string& sql, const std::str
 void PgConnection::fail(const std::string& sqlstate, const std::string& raw_message,
                         const std::string& sql, const std::string& what) {
   const std::string message = scrubbed(firstLine(raw_message.c_str()));
-  ErrorCode code = errorCodeForSqlState(sqlstate);
-  if (sqlstate.empty() && PQstatus(conn_) != CONNECTION_OK) code = ErrorCode::kServerUnreachable;
+  const ErrorCode code = errorCodeForFailure(sqlstate, message, PQstatus(conn_) == CONNECTION_OK);
   std::string text = what + ": " + message;
   if (!sqlstate.empty()) text += " (SQLSTATE " + sqlstate + ")";
   if (!sql.empty() && sql.size() < 400) text += " in statement: " + sql;

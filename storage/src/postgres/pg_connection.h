@@ -150,4 +150,11 @@ class PgConnection final : public TransactionControl {
 // Which placedb::ErrorCode a PostgreSQL SQLSTATE stands for.
 ErrorCode errorCodeForSqlState(const std::string& sqlstate);
 
+// Which placedb::ErrorCode a failed statement stands for: its SQLSTATE's, and for a failure
+// without one (libpq's own, the server never answered) a lost server when the connection is down
+// or libpq says it went while the statement ran (pipeline mode can report that before the
+// connection's status follows).
+ErrorCode errorCodeForFailure(const std::string& sqlstate, const std::string& message,
+                              bool connection_ok);
+
 }  // namespace placedb::storage::detail
