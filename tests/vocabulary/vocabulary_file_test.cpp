@@ -2,9 +2,11 @@
 #include <gtest/gtest.h>
 
 #include <boost/crc.hpp>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <random>
 #include <sstream>
 
@@ -319,6 +321,38 @@ TEST_F(VocabularyFile, TextExportIsWhatRtabmapLoads) {
             ErrorCode::kVocabularyRefused);
   EXPECT_NE(message.find("line 2: word id 0"), std::string::npos) << message;
   EXPECT_NE(message.find("zero.txt"), std::string::npos) << message;
+}
+
+// What RTAB-Map cannot load is refused before a byte is written, naming the file: a path's
+// existing file stays as it was, a stream gets nothing, and the message names what the caller
+// writes to (the command line passes its output's name).
+TEST_F(VocabularyFile, TextExportRefusesWhatRtabmapCannotLoadNamingTheFile) {
+  VocabularyData wide;
+  wide.dim = 1001;
+  wide.ids = {0};
+  wide.created_frames = {0};
+  wide.descriptors = cv::Mat::zeros(1, wide.dim, CV_32F);
+  const fs::path kept = dir_ / "kept.txt";
+  writeBytes(kept, "not to be touched\n");
+  std::string message;
+  EXPECT_EQ(codeOf([&] { writeVocabularyText(kept, wide); }, &message),
+            ErrorCode::kInvalidArgument);
+  EXPECT_NE(message.find(kept.string() + " as an RTAB-Map dictionary: dimension 1001"),
+            std::string::npos)
+      << message;
+  EXPECT_EQ(readBytes(kept), "not to be touched\n");
+
+  VocabularyData big = data_;
+  big.ids.front() = std::numeric_limits<std::int32_t>::max();
+  std::FILE* out = std::tmpfile();
+  ASSERT_NE(out, nullptr);
+  EXPECT_EQ(codeOf([&] { writeVocabularyText(out, big, "words.txt"); }, &message),
+            ErrorCode::kInvalidArgument);
+  EXPECT_NE(message.find("cannot write words.txt as an RTAB-Map dictionary: word id"),
+            std::string::npos)
+      << message;
+  EXPECT_EQ(std::ftell(out), 0L);
+  std::fclose(out);
 }
 
 }  // namespace

@@ -341,9 +341,8 @@ static void checkRtabmapFits(const VocabularyData& data, const std::string& name
                       std::to_string(id) + " does not fit RTAB-Map's int ids");
 }
 
-void writeVocabularyText(std::FILE* out, const VocabularyData& data) {
-  checkData(data);
-  checkRtabmapFits(data, "the output");
+// The rows of an RTAB-Map dictionary, for data already checked.
+static void writeRtabmapRows(std::FILE* out, const VocabularyData& data) {
   // RTAB-Map takes the descriptor dimension from the number that ends its header line.
   std::fprintf(out, "%s%d\n", kRtabmapHeader, data.dim);
   for (std::size_t i = 0; i < data.ids.size() && !std::ferror(out); ++i) {
@@ -354,11 +353,18 @@ void writeVocabularyText(std::FILE* out, const VocabularyData& data) {
   }
 }
 
+void writeVocabularyText(std::FILE* out, const VocabularyData& data, const std::string& name) {
+  checkData(data);
+  checkRtabmapFits(data, name);
+  writeRtabmapRows(out, data);
+}
+
 void writeVocabularyText(const std::filesystem::path& path, const VocabularyData& data) {
+  // Checked before the file is opened (and truncated): a refusal leaves it as it was.
   checkData(data);
   checkRtabmapFits(data, path.string());
   writeToPath(path, "cannot write vocabulary text",
-              [&data](std::FILE* out) { writeVocabularyText(out, data); });
+              [&data](std::FILE* out) { writeRtabmapRows(out, data); });
 }
 
 VocabularyData readVocabularyText(const std::filesystem::path& path, int expected_dim) {

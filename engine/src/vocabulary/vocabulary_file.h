@@ -70,8 +70,12 @@ void writeVocabularyFile(std::FILE* out, const VocabularyData& data);
 VocabularyData readVocabularyFile(const std::filesystem::path& path,
                                   const VocabularyExpectation& expect = {});
 
+// RTAB-Map's text dictionary. Data RTAB-Map cannot load (a dimension over 1000, an id its int
+// cannot hold) is refused with kInvalidArgument naming the file (`name` for a stream) before a
+// byte is written.
 void writeVocabularyText(const std::filesystem::path& path, const VocabularyData& data);
-void writeVocabularyText(std::FILE* out, const VocabularyData& data);
+void writeVocabularyText(std::FILE* out, const VocabularyData& data,
+                         const std::string& name = "the output");
 // expected_dim 0: taken from the header (or the first word). Throws kVocabularyRefused on a
 // malformed line or a dimension that differs from expected_dim or the header.
 VocabularyData readVocabularyText(const std::filesystem::path& path, int expected_dim = 0);

@@ -74,7 +74,7 @@ void writeVocabulary(const std::string& file, const vocab::VocabularyData& data,
   // A device is written, a link's target replaced, as every export is.
   writeWholeFile(file, [&](std::FILE* out) {
     if (text)
-      vocab::writeVocabularyText(out, data);
+      vocab::writeVocabularyText(out, data, file);
     else
       vocab::writeVocabularyFile(out, data);
   });
