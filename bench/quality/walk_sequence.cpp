@@ -56,7 +56,7 @@ namespace {
 using placedb::synthetic::SyntheticOptions;
 using placedb::synthetic::SyntheticSequence;
 
-int usage() {
+int usage(std::FILE* to, int code) {
   std::fputs(
       "usage: placedb_walk_sequence OUT [--scene ground|corridor|street] [--frames N]\n"
       "                             [--width W] [--height H] [--speed M] [--seed S]\n"
@@ -67,8 +67,8 @@ int usage() {
       "                             [--ground-contrast C] [--canyon-half-width M]\n"
       "                             [--canyon-height M] [--canyon-offset M]\n"
       "corridor and street scenes walk a single pass with a forward-looking camera\n",
-      stderr);
-  return 2;
+      to);
+  return code;
 }
 
 // Each maximal run of consecutive r (one pass over q's place) gives its best-overlapping frame.
@@ -97,7 +97,10 @@ std::vector<int> nearestPerPass(const SyntheticSequence& s, int q, const std::ve
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2 || argc % 2 != 0) return usage();
+  // OUT is a folder the walk is written into: "--help" there would make one of that name.
+  if (argc >= 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h"))
+    return usage(stdout, 0);
+  if (argc < 2 || argc % 2 != 0 || argv[1][0] == '-') return usage(stderr, 2);
   // The scene first: its camera is the starting point the other flags change.
   std::string scene = "ground";
   for (int i = 2; i + 1 < argc; i += 2) {
@@ -153,7 +156,7 @@ int main(int argc, char** argv) {
     } else if (key == "--canyon-offset") {
       options.canyon_walk_offset = std::atof(value);
     } else {
-      return usage();
+      return usage(stderr, 2);
     }
   }
   try {
