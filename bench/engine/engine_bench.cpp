@@ -101,12 +101,13 @@ void printStages(const char* title, const std::vector<Row>& rows) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    fmt::print(stderr,
+  const bool help = argc == 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h");
+  if (argc < 2 || help) {
+    fmt::print(help ? stdout : stderr,
                "usage: {} LIST [--resume-at N] [--set key=value]... [--log-dir DIR] "
                "[--limit N]\n",
                argv[0]);
-    return 2;
+    return help ? 0 : 2;
   }
   fs::path list = argv[1];
   std::size_t resume_at = 500, limit = 0;

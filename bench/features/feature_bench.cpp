@@ -61,6 +61,19 @@ int main(int argc, char** argv) {
   int max_features = 0;  // a common cap makes the extractors' feature counts comparable
   std::filesystem::path datasets = PLACEDB_DATASETS_DIR;
   if (const char* env = std::getenv("PLACEDB_DATASETS")) datasets = env;
+  const auto usage = [&](std::FILE* to, int code) {
+    std::fprintf(to,
+                 "usage: %s [--images N] [--repeats R] [--datasets DIR] [--max-features M]\n"
+                 "Times each feature extractor on N frames of lip6_outdoor and rtabmap_samples\n"
+                 "(PLACEDB_DATASETS or --datasets), R times over; see bench/features/README.md.\n",
+                 argv[0]);
+    return code;
+  };
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    if (flag == "--help" || flag == "-h") return usage(stdout, 0);
+  }
+  if (argc % 2 == 0) return usage(stderr, 2);  // flags come in pairs
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--images")
@@ -71,6 +84,8 @@ int main(int argc, char** argv) {
       datasets = argv[i + 1];
     else if (flag == "--max-features")
       max_features = std::max(0, std::atoi(argv[i + 1]));
+    else
+      return usage(stderr, 2);
   }
   std::vector<cv::Mat> originals;
   for (const char* name : {"lip6_outdoor", "rtabmap_samples"}) {

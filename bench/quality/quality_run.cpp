@@ -49,10 +49,14 @@ double peakRssMb() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    fmt::print(stderr, "usage: {} LIST --log OUT.csv [--map OUT.placedb] [--set key=value]...\n",
+  const bool help = argc == 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h");
+  if (argc < 2 || help) {
+    fmt::print(help ? stdout : stderr,
+               "usage: {} LIST --log OUT.csv [--map OUT.placedb] [--set key=value]...\n"
+               "Maps the frames of LIST into a new map (a temporary one unless --map) and writes\n"
+               "the EVALUATION.md log with diagnostic columns; prints one JSON line of totals.\n",
                argv[0]);
-    return 2;
+    return help ? 0 : 2;
   }
   const fs::path list = argv[1];
   fs::path log_path = "quality.csv", map_path;
