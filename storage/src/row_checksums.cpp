@@ -185,20 +185,22 @@ void appendInt(std::string& bytes, std::int64_t value) {
   for (int i = 0; i < 8; ++i) bytes.push_back(static_cast<char>(u >> (8 * i)));
 }
 
-void appendDouble(std::string& bytes, double value) {
-  std::int64_t bits = 0;
-  std::memcpy(&bits, &value, sizeof bits);
-  appendInt(bytes, bits);
-}
-
 }  // namespace
 
 RefsDigest::RefsDigest(std::int64_t location_id) { appendInt(bytes_, location_id); }
 
 void RefsDigest::add(std::int64_t word_id, double x, double y, double size, double angle,
                      double response) {
-  appendInt(bytes_, word_id);
-  for (double v : {x, y, size, angle, response}) appendDouble(bytes_, v);
+  // One append of the reference's 48 bytes: every keypoint load of a candidate reads a
+  // location's references through here, and a byte at a time cost more than the read.
+  unsigned char le[48];
+  std::int64_t values[6] = {word_id, 0, 0, 0, 0, 0};
+  const double reals[5] = {x, y, size, angle, response};
+  std::memcpy(values + 1, reals, sizeof reals);
+  for (int v = 0; v < 6; ++v)
+    for (int i = 0; i < 8; ++i)
+      le[8 * v + i] = static_cast<unsigned char>(static_cast<std::uint64_t>(values[v]) >> (8 * i));
+  bytes_.append(reinterpret_cast<const char*>(le), sizeof le);
   ++count_;
 }
 

@@ -2,6 +2,7 @@
 // refused when the row is read, naming the map, the table and the row.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <limits>
@@ -124,7 +125,23 @@ TEST(RowChecksums, StoredSumsAreTheDocumentedCrc32c) {
   location_words.integer(1000);
   location_words.integer(-1);
   location_words.bytes(descriptor.data(), descriptor.size() * sizeof(float));
+  // A location's references: its id, each reference's word and keypoint values (doubles as
+  // their bits), then how many there are (testing::writeFrame's four of frame 0).
+  BitwiseCrc32c refs;
+  refs.integer(1);
+  const auto real = [&refs](double v) {
+    std::int64_t bits = 0;
+    std::memcpy(&bits, &v, sizeof bits);
+    refs.integer(bits);
+  };
+  for (int i = 0; i < 4; ++i) {
+    refs.integer(i + 1);
+    for (double v : {double(i), double(i), 2.0, 0.0, 1.0}) real(v);
+  }
+  refs.integer(4);
   RawDb db(path);
+  EXPECT_EQ(db.rows("SELECT refs_digest FROM locations WHERE id = 1"),
+            std::vector<std::string>{std::to_string(refs.sum())});
   EXPECT_EQ(db.rows("SELECT checksum FROM location_word_descriptors WHERE location_id = 1"),
             std::vector<std::string>{std::to_string(location_words.sum())});
   EXPECT_EQ(db.rows("SELECT checksum FROM words WHERE id = 1000"),
