@@ -1,4 +1,5 @@
-// The WM keypoint cache hands back what was put in and forgets locations that leave WM.
+// The WM keypoint cache hands back what was put in and forgets locations that leave WM; the
+// positions of a place brought back are handed over once, to its first load.
 #include <gtest/gtest.h>
 
 #include "geometry/keypoint_cache.h"
@@ -33,6 +34,30 @@ TEST(KeypointCache, RetainIfDropsLocationsThatLeft) {
   EXPECT_EQ(cache.size(), 3u);
   EXPECT_EQ(cache.find(1), nullptr);
   ASSERT_NE(cache.find(4), nullptr);
+  EXPECT_EQ(cache.find(4)->points[0].x, 4.f);
+}
+
+TEST(KeypointCache, KeptPositionsAreTakenOnceAndLeaveWithTheirPlace) {
+  KeypointCache cache;
+  EXPECT_FALSE(cache.takePositions(3));
+  cache.keepPositions(3, entry(3.f));
+  cache.keepPositions(5, entry(5.f));
+  EXPECT_EQ(cache.find(3), nullptr);  // positions are not an entry: its descriptors are unread
+  const auto taken = cache.takePositions(3);
+  ASSERT_TRUE(taken);
+  EXPECT_EQ(taken->points[0].x, 3.f);
+  EXPECT_EQ(taken->words, std::vector<std::int64_t>{7});
+  EXPECT_FALSE(cache.takePositions(3));
+  cache.retainIf([](std::int64_t id) { return id != 5; });
+  EXPECT_FALSE(cache.takePositions(5));
+  EXPECT_EQ(cache.positionsKept(), 0u);
+}
+
+TEST(KeypointCache, PositionsOfAPlaceAlreadyLoadedAreNotKept) {
+  KeypointCache cache;
+  cache.insert(4, entry(4.f));
+  cache.keepPositions(4, entry(9.f));
+  EXPECT_EQ(cache.positionsKept(), 0u);
   EXPECT_EQ(cache.find(4)->points[0].x, 4.f);
 }
 

@@ -12,12 +12,24 @@ const CachedKeypoints& KeypointCache::insert(std::int64_t location, CachedKeypoi
 }
 
 void KeypointCache::retainIf(const std::function<bool(std::int64_t)>& keep) {
-  for (auto it = entries_.begin(); it != entries_.end();) {
-    if (keep(it->first))
-      ++it;
-    else
-      it = entries_.erase(it);
+  for (auto* map : {&entries_, &positions_}) {
+    for (auto it = map->begin(); it != map->end();) {
+      if (keep(it->first))
+        ++it;
+      else
+        it = map->erase(it);
+    }
   }
+}
+
+void KeypointCache::keepPositions(std::int64_t location, CachedKeypoints positions) {
+  if (!entries_.count(location)) positions_.insert_or_assign(location, std::move(positions));
+}
+
+std::optional<CachedKeypoints> KeypointCache::takePositions(std::int64_t location) {
+  auto node = positions_.extract(location);
+  if (node.empty()) return std::nullopt;
+  return std::move(node.mapped());
 }
 
 }  // namespace placedb

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -32,12 +33,23 @@ class KeypointCache {
  public:
   const CachedKeypoints* find(std::int64_t location) const;
   const CachedKeypoints& insert(std::int64_t location, CachedKeypoints entry);
-  // Drops every entry whose location `keep` refuses (those that left working memory).
+  // Drops every entry (and every kept position) whose location `keep` refuses (those that left
+  // working memory).
   void retainIf(const std::function<bool(std::int64_t)>& keep);
   std::size_t size() const { return entries_.size(); }
 
+  // A place brought back from long-term memory has its references read for its signature, and
+  // they hold its keypoints' positions and words: kept here (without descriptors) until the check
+  // first loads the place, which then reads only the descriptors. A place brought back by the
+  // code search is a loop candidate in that very frame, so each would otherwise be read twice.
+  void keepPositions(std::int64_t location, CachedKeypoints positions);
+  // The kept positions of `location`, once (they are dropped); nullopt when none are kept.
+  std::optional<CachedKeypoints> takePositions(std::int64_t location);
+  std::size_t positionsKept() const { return positions_.size(); }
+
  private:
   std::unordered_map<std::int64_t, CachedKeypoints> entries_;
+  std::unordered_map<std::int64_t, CachedKeypoints> positions_;
 };
 
 }  // namespace placedb

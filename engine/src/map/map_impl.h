@@ -158,6 +158,8 @@ class MapImpl final : public Map {
   bool passesNearLastClosure(const GeometricResult& g) const;
   const CachedKeypoints& keypointsOf(std::int64_t location_id);   // from the cache or the file
   CachedKeypoints loadKeypoints(std::int64_t location_id) const;  // from the file
+  static CachedKeypoints keypointPositions(const std::vector<storage::WordRef>& refs);
+  void loadKeypointCodes(std::int64_t location_id, CachedKeypoints& entry) const;
   GeometricView viewOf(const CachedKeypoints& keypoints) const;
   void retrieveNeighbours(std::int64_t hypothesis, FrameWrite& write, FrameResult& result);
   // Moves LTM locations back to WM: signatures, missing words, links, ages.

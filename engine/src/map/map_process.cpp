@@ -447,11 +447,15 @@ void MapImpl::restoreWords(std::vector<std::int64_t> missing,
 void MapImpl::bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write,
                         FrameResult& result) {
   if (ids.empty()) return;
-  auto signatures = store_->loadWordIds(ids);
+  // The whole references: the signature's words, and the keypoints the check will compare
+  // (KeypointCache::keepPositions).
+  auto refs = store_->loadWordRefs(ids);
   std::vector<std::int64_t> missing;
   for (std::int64_t id : ids) {
-    for (WordId word : index_.add(id, Signature::fromWords(std::move(signatures[id]))).referenced)
+    CachedKeypoints positions = keypointPositions(refs[id]);
+    for (WordId word : index_.add(id, Signature::fromWords(positions.words)).referenced)
       if (!vocabulary_->contains(word)) missing.push_back(word);
+    keypoint_cache_.keepPositions(id, std::move(positions));
   }
   restoreWords(std::move(missing), ids);
   for (std::int64_t id : ids) {

@@ -31,19 +31,33 @@ double similarityOf(const std::vector<LocationSimilarity>& similarities, Locatio
 
 const CachedKeypoints& MapImpl::keypointsOf(std::int64_t location_id) {
   if (const CachedKeypoints* hit = keypoint_cache_.find(location_id)) return *hit;
-  return keypoint_cache_.insert(location_id, loadKeypoints(location_id));
+  std::optional<CachedKeypoints> kept = keypoint_cache_.takePositions(location_id);
+  if (!kept) return keypoint_cache_.insert(location_id, loadKeypoints(location_id));
+  loadKeypointCodes(location_id, *kept);
+  return keypoint_cache_.insert(location_id, std::move(*kept));
 }
 
 CachedKeypoints MapImpl::loadKeypoints(std::int64_t location_id) const {
+  CachedKeypoints entry = keypointPositions(store_->loadWordRefs(location_id));
+  loadKeypointCodes(location_id, entry);
+  return entry;
+}
+
+CachedKeypoints MapImpl::keypointPositions(const std::vector<storage::WordRef>& refs) {
   CachedKeypoints entry;
-  for (const auto& ref : store_->loadWordRefs(location_id)) {
+  entry.points.reserve(refs.size());
+  entry.words.reserve(refs.size());
+  for (const auto& ref : refs) {
     entry.points.emplace_back(ref.x, ref.y);
     entry.words.push_back(ref.word_id);
   }
+  return entry;
+}
+
+void MapImpl::loadKeypointCodes(std::int64_t location_id, CachedKeypoints& entry) const {
   if (auto bytes = store_->getState(keypointDescriptorsKey(location_id)))
     entry.codes =
         std::make_shared<const DescriptorCodes>(storedDescriptorCodes(*bytes, vocabulary_->dim()));
-  return entry;
 }
 
 GeometricView MapImpl::viewOf(const CachedKeypoints& keypoints) const {
