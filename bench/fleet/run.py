@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""bench/fleet: 1, 2 and 4 robots writing one map on a PostgreSQL server at once, against the
+"""bench/fleet: 1, 2, 4 and 8 robots writing one map on a PostgreSQL server at once, against the
 same robots one after the other in one SQLite file (a file has one writer).
 
 Every robot starts from robot A's map (lip6_outdoor frames 0-539, mapped once into a file and
@@ -19,7 +19,7 @@ the same stretch of the route counting as right within 10 frames), closures of r
 robot onto lip6 places or the reverse ("onto another place", which must be 0), and `placedb
 query` p50 over 5 images of each robot (time_ms of its --json) on the map they leave.
 
-Usage: bench/fleet/run.py [--build BUILD] [--datasets DIR] [--work DIR] [--writers 1,2,4]
+Usage: bench/fleet/run.py [--build BUILD] [--datasets DIR] [--work DIR] [--writers 1,2,4,8]
                          [--maps server,file]
 BUILD may be any build of placedb (another commit's, to compare): only its tools/placedb is run.
 """
@@ -139,7 +139,7 @@ def main():
     parser.add_argument("--build", default=os.path.join(root, "build"))
     parser.add_argument("--datasets", default=None)
     parser.add_argument("--work", default=None)
-    parser.add_argument("--writers", default="1,2,4")
+    parser.add_argument("--writers", default="1,2,4,8")
     parser.add_argument("--maps", default="server,file",
                         help="which maps each configuration writes: server, file or both")
     args = parser.parse_args()
