@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""bench/fleet: 1, 2 and 4 robots writing one map on a PostgreSQL server at once, against the
+"""bench/fleet: 1, 2, 4 and 8 robots writing one map on a PostgreSQL server at once, against the
 same robots one after the other in one SQLite file (a file has one writer).
 
 Every robot starts from robot A's map (lip6_outdoor frames 0-539, mapped once into a file and
@@ -8,6 +8,9 @@ copied to each run's map). The robots:
   2 writers: B, C (rtabmap_samples)
   4 writers: B1 (lip6 540-800), B2 (lip6 801-1062), C, D (lip6_outdoor_160x128 frames 540-1062,
              another camera on B's route)
+  8 writers: B1-B4 (lip6 540-670, 671-800, 801-931, 932-1062), C, D1 and D2
+             (lip6_outdoor_160x128 540-800, 801-1062), E (lip6_outdoor_120x96 540-1062, a third
+             camera on B's route)
 Printed per configuration and backend: frames, wall time, aggregate frames per second, per-frame
 time p50/p99 and storage time mean (from the --log of every robot), the server's CPU time per
 frame (its processes, from /proc), cross-robot closures (onto another session's places; those
@@ -16,7 +19,9 @@ the same stretch of the route counting as right within 10 frames), closures of r
 robot onto lip6 places or the reverse ("onto another place", which must be 0), and `placedb
 query` p50 over 5 images of each robot (time_ms of its --json) on the map they leave.
 
-Usage: bench/fleet/run.py [--build BUILD] [--datasets DIR] [--work DIR] [--writers 1,2,4]
+Usage: bench/fleet/run.py [--build BUILD] [--datasets DIR] [--work DIR] [--writers 1,2,4,8]
+                         [--maps server,file]
+BUILD may be any build of placedb (another commit's, to compare): only its tools/placedb is run.
 """
 import argparse
 import json
@@ -48,10 +53,23 @@ def robots(work, data, writers):
     if writers == 2:
         return {"B": (fs.write_list(out("B"), lip6, 540, 1063), 540),
                 "C": (fs.write_list(out("C"), samples, 0, 10**9), None)}
-    return {"B1": (fs.write_list(out("B1"), lip6, 540, 801), 540),
-            "B2": (fs.write_list(out("B2"), lip6, 801, 1063), 801),
+    if writers == 4:
+        return {"B1": (fs.write_list(out("B1"), lip6, 540, 801), 540),
+                "B2": (fs.write_list(out("B2"), lip6, 801, 1063), 801),
+                "C": (fs.write_list(out("C"), samples, 0, 10**9), None),
+                "D": (fs.write_list(out("D"), small, 540, 1063), 540)}
+    if writers != 8:
+        raise SystemExit(f"--writers: 1, 2, 4 or 8, not {writers}")
+    # As 4, each lip6 stretch split once more, and a third camera on B's route.
+    smaller = os.path.join(data, "lip6_outdoor_120x96")
+    return {"B1": (fs.write_list(out("B1"), lip6, 540, 671), 540),
+            "B2": (fs.write_list(out("B2"), lip6, 671, 801), 671),
+            "B3": (fs.write_list(out("B3"), lip6, 801, 932), 801),
+            "B4": (fs.write_list(out("B4"), lip6, 932, 1063), 932),
             "C": (fs.write_list(out("C"), samples, 0, 10**9), None),
-            "D": (fs.write_list(out("D"), small, 540, 1063), 540)}
+            "D1": (fs.write_list(out("D1"), small, 540, 801), 540),
+            "D2": (fs.write_list(out("D2"), small, 801, 1063), 801),
+            "E": (fs.write_list(out("E"), smaller, 540, 1063), 540)}
 
 
 def run_robots(pb, map_uri, team, work, tag, at_once):
@@ -121,8 +139,13 @@ def main():
     parser.add_argument("--build", default=os.path.join(root, "build"))
     parser.add_argument("--datasets", default=None)
     parser.add_argument("--work", default=None)
-    parser.add_argument("--writers", default="1,2,4")
+    parser.add_argument("--writers", default="1,2,4,8")
+    parser.add_argument("--maps", default="server,file",
+                        help="which maps each configuration writes: server, file or both")
     args = parser.parse_args()
+    maps = args.maps.split(",")
+    if not maps or any(m not in ("server", "file") for m in maps):
+        raise SystemExit(f"--maps: server, file or server,file, not {args.maps}")
     pb = os.path.join(os.path.abspath(args.build), "tools", "placedb")
     data = fs.datasets_dir(args.datasets)
     work = args.work or tempfile.mkdtemp(prefix="placedb-fleet-bench.")
@@ -139,14 +162,18 @@ def main():
     try:
         for writers in [int(w) for w in args.writers.split(",")]:
             team = robots(work, data, writers)
-            uri = server.database(f"fleet{writers}")
-            fs.copy_map(pb, base, uri)
-            cpu = fs.server_cpu_seconds(server.folder)
-            logs, wall = run_robots(pb, uri, team, work, f"pg{writers}", True)
-            cpu = fs.server_cpu_seconds(server.folder) - cpu
-            f = figures(pb, uri, team, logs, wall, gt)
-            f["server_cpu_ms"] = 1000 * cpu / f["frames"]
-            results.append((writers, "server", f))
+            if "server" in maps:
+                uri = server.database(f"fleet{writers}")
+                fs.copy_map(pb, base, uri)
+                cpu = fs.server_cpu_seconds(server.folder)
+                logs, wall = run_robots(pb, uri, team, work, f"pg{writers}", True)
+                cpu = fs.server_cpu_seconds(server.folder) - cpu
+                f = figures(pb, uri, team, logs, wall, gt)
+                f["server_cpu_ms"] = 1000 * cpu / f["frames"]
+                results.append((writers, "server", f))
+            if "file" not in maps:
+                print(f"{writers} writers done", file=sys.stderr, flush=True)
+                continue
             path = os.path.join(work, f"file{writers}.placedb")
             for stale in (path, path + "-wal", path + "-shm", path + "-lock"):
                 if os.path.exists(stale):

@@ -206,5 +206,35 @@ TEST(PgMapStore, DamagedRowsAreRefusedOnReadAndListedByCheck) {
   EXPECT_EQ(report.findings[2].table, "kd_nodes");
 }
 
+// Schema 16 dropped word_refs' keys on its word and location (migrations/pg/0016 says why): the
+// server no longer refuses deleting a referenced word or location, so check must find the
+// references left dangling; and the store deletes a location's references with it.
+TEST(PgMapStore, CheckFindsReferencesWhoseWordOrLocationWasDeleted) {
+  PLACEDB_REQUIRE_PG_SERVER(server);
+  const std::string uri = freshPgDatabase(server, pgTestDatabaseName());
+  {
+    auto store = openMapStore(uri, OpenMode::kReadWrite);
+    const auto session = store->beginSession("src", {}, "test");
+    for (int i = 0; i < 2; ++i) testing::writeFrame(*store, session, i);
+  }
+  {
+    auto store = openMapStore(uri, OpenMode::kReadWrite);
+    store->deleteLocation(1);
+    EXPECT_TRUE(store->loadWordRefs(1).empty());
+  }
+  EXPECT_TRUE(checkMap(uri).ok());
+  pgAdmin(uri, "DELETE FROM words WHERE id = 6");  // location 2's second reference
+  pgAdmin(uri, "INSERT INTO word_refs VALUES (9, 0, 5, 0, 0, 1, 0, 1)");  // no location 9
+  const CheckReport report = checkMap(uri);
+  ASSERT_EQ(report.findings_total, 2);
+  EXPECT_EQ(report.findings[0].table, "word_refs");
+  EXPECT_EQ(report.findings[0].row, "2 1");
+  EXPECT_NE(report.findings[0].problem.find("word 6"), std::string::npos)
+      << report.findings[0].problem;
+  EXPECT_EQ(report.findings[1].row, "9 0");
+  EXPECT_NE(report.findings[1].problem.find("location 9"), std::string::npos)
+      << report.findings[1].problem;
+}
+
 }  // namespace
 }  // namespace placedb::storage

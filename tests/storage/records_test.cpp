@@ -402,19 +402,23 @@ TEST_P(Records, ForeignKeysAreEnforced) {
     return f;
   }());
   store_->insertLocation({1, session_, 0, Tier::kWm, 1});
-  try {
-    store_->insertWordRefs(1, {{12345, 0, 0, 1, 0, 1}});
-    FAIL() << "a reference to an unknown word was stored";
-  } catch (const StorageError& error) {
-    EXPECT_EQ(error.code(), ErrorCode::kStorage);
-    if (GetParam() == "sqlite") {
+  if (GetParam() == "sqlite") {
+    try {
+      store_->insertWordRefs(1, {{12345, 0, 0, 1, 0, 1}});
+      FAIL() << "a reference to an unknown word was stored";
+    } catch (const StorageError& error) {
+      EXPECT_EQ(error.code(), ErrorCode::kStorage);
       EXPECT_EQ(error.sqliteCode(), 787);  // SQLITE_CONSTRAINT_FOREIGNKEY
       EXPECT_NE(std::string(error.what()).find("FOREIGN KEY"), std::string::npos);
-    } else {
-      EXPECT_NE(std::string(error.what()).find("foreign key"), std::string::npos);
+      EXPECT_NE(error.sql().find("INSERT INTO word_refs"), std::string::npos);
+      EXPECT_NE(std::string(error.what()).find("INSERT INTO word_refs"), std::string::npos);
     }
-    EXPECT_NE(error.sql().find("INSERT INTO word_refs"), std::string::npos);
-    EXPECT_NE(std::string(error.what()).find("INSERT INTO word_refs"), std::string::npos);
+  } else {
+    // A server's word_refs has no keys since schema 16 (migrations/pg/0016 says why): what the
+    // writer does not prove, check reports (PgMapStore.CheckFindsReferencesWhose...).
+    store_->insertWordRefs(1, {{12345, 0, 0, 1, 0, 1}});
+    EXPECT_EQ(store_->loadWordRefs(1).size(), 1u);
+    store_->replaceWordRefs(1, {});
   }
   EXPECT_TRUE(store_->loadWordRefs(1).empty());
 

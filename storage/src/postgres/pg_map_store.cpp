@@ -517,6 +517,8 @@ void PgMapStore::deleteLocation(std::int64_t location_id) {
   db_->send(
       "WITH p AS (DELETE FROM filter_posterior WHERE location_id = $1), "
       "k AS (DELETE FROM engine_state WHERE key = $2), "
+      // No key cascades a location's references since schema 16 (migrations/pg/0016).
+      "r AS (DELETE FROM word_refs WHERE location_id = $1), "
       "n AS (UPDATE locations o SET link_count = o.link_count - (SELECT count(*) FROM links k "
       "WHERE (k.location_a = $1 AND k.location_b = o.id) OR (k.location_b = $1 AND "
       "k.location_a = o.id)) WHERE o.id IN (SELECT location_b FROM links WHERE location_a = $1 "
