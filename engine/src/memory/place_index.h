@@ -42,8 +42,8 @@ class PlaceIndex {
   // 1/kProbeShare of the codes, 1,280 instead of 16,384 codes at rows = 16,384, and k-means over
   // the training codes costs 8 rounds of rows x rows/kListRows products, once. Measured on the
   // 100k-frame scale map (bench/scale/README.md, placedb_place_lists_recall), these codes have
-  // little cluster structure: the nearest 1/16 of the lists hold 15 % of the codes and 75 % of
-  // the exact top 5, and 99 % of it takes a third of the lists (70 % of the codes). Hence the
+  // little cluster structure: the nearest 1/16 of the lists hold 8 % of the codes and 64 % of
+  // the exact top 5, and 99 % of it takes half the lists (58 % of the codes). Hence the
   // engine's default, place_lists_from = 0.
   // list_rows and probe_share other than these are for bench/scale/place_lists_recall only.
   void setListsFrom(std::size_t rows, std::size_t list_rows = kListRows,

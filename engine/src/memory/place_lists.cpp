@@ -11,13 +11,12 @@
 namespace placedb {
 namespace {
 
-// The mean `sum` / members as bytes, scaled so that its largest value is +-127 (the bytes keep as
-// much of it as they can, and stay within encodedCodeDots' range); returns the scale.
-double roundedMean(const std::int64_t* sum, std::size_t members, std::size_t dim,
-                   std::int8_t* out) {
-  std::int64_t largest = 0;
-  for (std::size_t d = 0; d < dim; ++d)
-    largest = std::max<std::int64_t>(largest, sum[d] < 0 ? -sum[d] : sum[d]);
+// The mean `sum` / members of unit codes as bytes, scaled so that its largest value is +-127 (the
+// bytes keep as much of it as they can, and stay within encodedCodeDots' range); returns that
+// scale, bytes over mean.
+double roundedMean(const double* sum, std::size_t members, std::size_t dim, std::int8_t* out) {
+  double largest = 0;
+  for (std::size_t d = 0; d < dim; ++d) largest = std::max(largest, std::abs(sum[d]));
   for (std::size_t d = 0; d < dim; ++d)
     out[d] = largest == 0
                  ? 0
@@ -53,9 +52,14 @@ void PlaceLists::scores(const std::int8_t* code, double* out) const {
   // Centres are within range by construction; a code may not be (no encoder makes one).
   (withinEncodedRange(code, dim_) ? encodedCodeDots : codeDots)(code, centres_.data(), lists, dim_,
                                                                 products.data());
-  // -|x - c|^2 / 2 less |x|^2 / 2, the same for every centre: the nearest scores highest.
+  // Of the unit code u = x / |x| and each list's mean c: -|u - c|^2 / 2 less the 1/2 every
+  // centre shares, so the nearest scores highest. Unit codes because the search ranks cosines:
+  // the encoder scales each code by its largest value, so lengths differ by more than the
+  // distances that separate places (by the length, lists held twice the codes for the same
+  // recall: bench/scale/README.md).
+  const double n = std::sqrt(double(codeDot(code, code, dim_)));
   for (std::size_t l = 0; l < lists; ++l)
-    out[l] = double(products[l]) / scales_[l] - half_norm2_[l];
+    out[l] = n == 0 ? 0.0 : double(products[l]) / (scales_[l] * n) - half_norm2_[l];
 }
 
 std::size_t PlaceLists::nearest(const std::int8_t* code) const {
@@ -88,9 +92,15 @@ PlaceLists PlaceLists::train(const std::vector<const std::int8_t*>& codes, std::
   std::vector<std::int8_t> centres(lists * dim);
   for (std::size_t l = 0; l < lists; ++l)
     std::copy(codes[l * n / lists], codes[l * n / lists] + dim, centres.data() + l * dim);
-  out.setCentres(std::move(centres), std::vector<double>(lists, 1.0));
+  std::vector<double> first_scales(lists);
+  for (std::size_t l = 0; l < lists; ++l) {
+    const std::int8_t* c = centres.data() + l * dim;
+    const double n = std::sqrt(double(codeDot(c, c, dim)));
+    first_scales[l] = n > 0 ? n : 1.0;  // the centre is the unit code
+  }
+  out.setCentres(std::move(centres), std::move(first_scales));
   std::vector<std::size_t> owner(n);
-  std::vector<std::int64_t> sums(lists * dim);
+  std::vector<double> sums(lists * dim);
   for (int round = 0; round < kIterations; ++round) {
     // Each code's nearest centre on its own (a task a block of codes): the same whatever the
     // thread that computes it.
@@ -99,11 +109,13 @@ PlaceLists PlaceLists::train(const std::vector<const std::int8_t*>& codes, std::
       const std::size_t end = std::min(n, (std::size_t(b) + 1) * kBlock);
       for (std::size_t i = std::size_t(b) * kBlock; i < end; ++i) owner[i] = out.nearest(codes[i]);
     });
-    std::fill(sums.begin(), sums.end(), 0);
+    std::fill(sums.begin(), sums.end(), 0.0);
     std::vector<std::size_t> members(lists, 0);
     for (std::size_t i = 0; i < n; ++i) {
-      std::int64_t* sum = sums.data() + owner[i] * dim;
-      for (std::size_t d = 0; d < dim; ++d) sum[d] += codes[i][d];
+      double* sum = sums.data() + owner[i] * dim;
+      const double length = std::sqrt(double(codeDot(codes[i], codes[i], dim)));
+      if (length > 0)
+        for (std::size_t d = 0; d < dim; ++d) sum[d] += codes[i][d] / length;
       ++members[owner[i]];
     }
     std::vector<std::int8_t> next = out.centres_;

@@ -5,15 +5,16 @@
 // the centres and about probes/lists of the codes.
 //
 // Why not faiss (IndexIVFFlat) or hnswlib, both in Debian: resume must decide exactly as an
-// uninterrupted run. Here the centres are a pure function of fixed codes (k-means in integers
-// over the codes of the lowest location ids, which never change: a location's code is written
-// once), each row's list a pure function of its code, and the rows scanned are ranked by the
-// same exact int8 products and the same tie rule as the exact scan, so the answer depends on
-// neither insertion order nor thread count and nothing needs storing. faiss's k-means runs on
-// BLAS floats (rounding, and so assignments, follow the thread count and the CPU's kernels), and
-// its lists would hold float copies of the codes (4x the 25 MB of a 100k-location map); an
-// HNSW graph depends on insertion history and would have to be stored with the map or rebuilt
-// in the same order at every open. bench/scale/README.md has the recall and time measured.
+// uninterrupted run. Here the centres are a pure function of fixed codes (k-means over the
+// codes of the lowest location ids, which never change: a location's code is written once;
+// its sums in their order, on one thread), each row's list a pure function of its code, and the
+// rows scanned are ranked by the same exact int8 products and the same tie rule as the exact scan,
+// so the answer depends on neither insertion order nor thread count and nothing needs storing.
+// faiss's k-means runs on BLAS floats (rounding, and so assignments, follow the thread count and
+// the CPU's kernels), and its lists would hold float copies of the codes (4x the 25 MB of a
+// 100k-location map); an HNSW graph depends on insertion history and would have to be stored with
+// the map or rebuilt in the same order at every open. bench/scale/README.md has the recall and time
+// measured.
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -23,10 +24,11 @@ namespace placedb {
 class PlaceLists {
  public:
   // Trains `lists` centres on `codes` (dim signed bytes each, in a fixed order: the caller's
-  // is by location id) by spherical k-means: the centre of list i starts as code i*n/lists,
-  // then kIterations rounds assign every code to its nearest centre and move each centre to the
-  // direction of its codes' sum, rounded to bytes. Integers and fixed ties throughout, so the
-  // centres are the same on every machine and thread count. `threads` share the assignments.
+  // is by location id) by k-means over the unit codes (x / |x|, whose distances rank as the
+  // search's cosines): the centre of list i starts as code i*n/lists, then up to kIterations
+  // rounds assign every code to its nearest centre and move each centre to the mean of its
+  // codes, rounded to bytes. Sums run in the codes' order and ties go to the smaller list, so
+  // the centres are the same for any thread count. `threads` share the assignments.
   static PlaceLists train(const std::vector<const std::int8_t*>& codes, std::size_t dim,
                           std::size_t lists, int threads);
 
