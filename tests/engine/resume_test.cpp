@@ -96,6 +96,35 @@ TEST_P(ResumeTest, StoppedEveryTenthFrameEqualsStraightRun) {
   }
 }
 
+// The place-code search through the inverted file (memory/place_lists.h), its threshold set low
+// so that it starts mid-run: stopped every seventh frame, before the lists are trained, at the
+// frame that trains them and after, the run decides exactly as a straight one (a reopened map
+// trains its lists on the same codes, those of the lowest location ids).
+TEST_P(ResumeTest, StoppedAcrossThePlaceListsThresholdEqualsStraightRun) {
+  if (GetParam() == 0) GTEST_SKIP() << "no place-code search without a bound";
+  Options options;
+  options.wm_max = GetParam();
+  options.place_lists_from = 40;
+  auto straight = run("straight_lists" + std::to_string(GetParam()), options, 0, true);
+  std::string path;
+  auto split = run("split_lists" + std::to_string(GetParam()), options, 7, false,
+                   [&path](const std::string& closed) { path = closed; });
+  expectSame(straight, split);
+
+  // The lists were used: the map holds more codes than the threshold, and a search trains them.
+  auto map = Map::open(path, options);
+  ASSERT_GT(impl(*map).placeIndex().size(), 60u);
+  std::size_t found = 0;
+  for (const auto& o : straight) found += o.retrieved_by_search;
+  EXPECT_GT(found, 0u);
+  // A search of a reopened map trains its lists (the run's last frames did the same).
+  const auto matches = impl(*map).placeIndex().search(std::vector<std::int8_t>(256, 1), 5,
+                                                      [](std::int64_t) { return true; });
+  EXPECT_FALSE(matches.empty());
+  EXPECT_GE(impl(*map).placeIndex().lists(), 2u);
+  EXPECT_EQ(impl(*map).placeIndex().probes(), 1u);
+}
+
 // Every location's words beside it (schema 13) are copies of its words' rows: the distinct words of
 // its signature, with their descriptors and created frames as the words table holds them.
 void expectWordRowsCopyWords(const std::string& path) {

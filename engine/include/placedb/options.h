@@ -76,6 +76,11 @@ struct Options {
   int read_ahead_links = 1;      // the places the next frame may bring back from LTM (and
                                  // those this many links from them) are read on a thread into
                                  // the OS page cache (SQLite maps), 0 = off
+  int place_lists_from = 0;      // from this many place codes on, the place-code search of each
+                                 // frame probes an inverted file instead of reading every code
+                                 // (memory/place_lists.h); 0 = always every code, the default:
+                                 // on the codes measured so far an index that keeps 99 % of the
+                                 // exact top 5 reads most codes anyway (bench/scale/README.md)
   int wm_immune_newest = 0;      // newest WM locations never transferred (at least)
   double wm_recent_ratio = 0.2;  // ... or this share of WM, whichever is more
 

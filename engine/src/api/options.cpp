@@ -201,6 +201,12 @@ const std::vector<Row>& table() {
               "hypothesis and its place-code search, ranked 3 x ltm_search deep) and those this "
               "many links from them are read on a thread of their own, so that the frame finds "
               "them in the OS page cache (SQLite maps); 0 = off; decisions never depend on it"),
+      integer("place_lists_from", &Options::place_lists_from, 0, 100000000, "0..1e8",
+              "from this many place codes on, each frame's place-code search scans the codes of "
+              "one in 16 of place_lists_from/64 coarse centres, those nearest the frame's (an "
+              "inverted file trained once on the codes of the map's first locations), not every "
+              "code; 0 = every code always (the default: bench/scale/README.md has why). Below it "
+              "nothing changes"),
       integer("wm_immune_newest", &Options::wm_immune_newest, 0, 100000, "0..100000",
               "newest WM locations never transferred (at least)"),
       real("wm_recent_ratio", &Options::wm_recent_ratio, 0, kBelowOne, "0..1, 1 excluded",

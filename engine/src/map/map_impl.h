@@ -58,6 +58,8 @@ class MapImpl final : public Map {
   // For tests: empty when every location is in exactly one tier, the inverted index holds
   // exactly the STM and WM signatures and the vocabulary exactly their words; else the problem.
   std::string checkConsistency() const;
+  // For tests: the place codes and how their search runs (exact, or lists trained).
+  const PlaceIndex& placeIndex() const { return places_; }
 
  private:
   // What one frame writes, gathered while it is processed and committed in one transaction.

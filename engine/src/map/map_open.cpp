@@ -194,6 +194,7 @@ void MapImpl::restoreFromStore() {
   coder_.reset();
   places_.clear();
   places_.setThreads(resolveThreadCount(options_.threads));
+  places_.setListsFrom(static_cast<std::size_t>(options_.place_lists_from));
   place_neighbourhood_.reset();  // of the codes just cleared
   ltm_words_.reset();            // their words went with the vocabulary configure() replaced
   auto centres = store_->getState(kPlaceCoderKey);

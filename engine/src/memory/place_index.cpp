@@ -41,6 +41,55 @@ void PlaceIndex::eachProduct(const std::vector<std::int8_t>& code, Visit&& visit
   for (std::size_t row = 0; row < rows; ++row) visit(row, out[row]);
 }
 
+template <typename Visit>
+void PlaceIndex::eachListedProduct(const std::vector<std::int8_t>& code,
+                                   const std::vector<std::size_t>& lists, Visit&& visit) const {
+  // One thread: a probe reads a few thousand codes, less than handing tasks out would cost.
+  const bool encoded = rows_with_min_byte_ == 0 && withinEncodedRange(code.data(), dim_);
+  thread_local std::vector<std::int32_t> products;
+  for (std::size_t list : lists) {
+    const std::vector<std::uint32_t>& rows = lists_->rows(list);
+    products.resize(rows.size());
+    (encoded ? encodedCodeDots : codeDots)(code.data(), lists_->codes(list), rows.size(), dim_,
+                                           products.data());
+    for (std::size_t i = 0; i < rows.size(); ++i) visit(rows[i], products[i]);
+  }
+}
+
+void PlaceIndex::setListsFrom(std::size_t rows, std::size_t list_rows, std::size_t probe_share) {
+  lists_from_ = rows;
+  list_rows_ = std::max<std::size_t>(1, list_rows);
+  probe_share_ = std::max<std::size_t>(1, probe_share);
+  lists_.reset();
+}
+
+std::size_t PlaceIndex::probes() const {
+  return lists_ ? std::max<std::size_t>(1, lists_->lists() / probe_share_) : 0;
+}
+
+std::vector<std::size_t> PlaceIndex::probedLists(const std::vector<std::int8_t>& code) const {
+  if (lists_from_ == 0 || ids_.size() < lists_from_) return {};
+  if (!lists_) {
+    // The codes of the lists_from_ lowest ids, by id: the same set and order whenever this runs.
+    std::vector<std::uint32_t> order(ids_.size());
+    for (std::size_t row = 0; row < order.size(); ++row) order[row] = std::uint32_t(row);
+    std::nth_element(order.begin(), order.begin() + lists_from_ - 1, order.end(),
+                     [&](std::uint32_t a, std::uint32_t b) { return ids_[a] < ids_[b]; });
+    order.resize(lists_from_);
+    std::sort(order.begin(), order.end(),
+              [&](std::uint32_t a, std::uint32_t b) { return ids_[a] < ids_[b]; });
+    std::vector<const std::int8_t*> codes;
+    codes.reserve(order.size());
+    for (std::uint32_t row : order) codes.push_back(rowData(row));
+    // At least two lists, so that a threshold set small (tests) still skips codes.
+    lists_ = PlaceLists::train(codes, dim_, std::max<std::size_t>(2, lists_from_ / list_rows_),
+                               threads_);
+    for (std::size_t row = 0; row < ids_.size(); ++row)
+      lists_->addRow(std::uint32_t(row), rowData(row));
+  }
+  return lists_->nearest(code.data(), probes());
+}
+
 void offerMatch(std::vector<PlaceMatch>& best, std::size_t k, const PlaceMatch& m,
                 const std::function<bool(std::int64_t)>& admit) {
   if (best.size() == k && !better(m, best.back())) return;
@@ -77,9 +126,11 @@ void PlaceIndex::add(std::int64_t location, const std::vector<std::int8_t>& code
     if (row % kChunkRows == 0) chunks_.emplace_back(new std::int8_t[kChunkRows * dim_]);
     std::copy(code.begin(), code.end(), rowData(row));
     norms_.push_back(norm(code.data(), dim_));
+    if (lists_) lists_->addRow(static_cast<std::uint32_t>(row), code.data());
   } else {
     std::copy(code.begin(), code.end(), rowData(row));
     norms_[row] = norm(code.data(), dim_);
+    lists_.reset();  // trained again, on the codes as they now are, as a reopened map would be
   }
 }
 
@@ -92,6 +143,7 @@ void PlaceIndex::clear() {
   sum_.clear();
   rows_with_min_byte_ = 0;
   centre_.reset();
+  lists_.reset();
 }
 
 const PlaceIndex::Centre& PlaceIndex::centre() const {
@@ -153,8 +205,9 @@ std::vector<PlaceMatch> PlaceIndex::search(const std::vector<std::int8_t>& code,
   best.reserve(k + 1);
   // Each row's cosine only where it may enter the k best: its product is at least the k-th
   // cosine times the two norms, less a margin far above the rounding of either side. The
-  // cosines kept are the exact expression's.
-  eachProduct(code, [&](std::size_t row, std::int32_t product) {
+  // cosines kept are the exact expression's, and the rows' order changes nothing (ties go to the
+  // smaller id), so the lists' answer is the exact scan's over the rows they hold.
+  const auto offer = [&](std::size_t row, std::int32_t product) {
     if (norms_[row] == 0) return;
     if (best.size() == k) {
       const double scale = norms_[row] * query_norm;
@@ -162,7 +215,11 @@ std::vector<PlaceMatch> PlaceIndex::search(const std::vector<std::int8_t>& code,
       if (double(product) < bar - 1e-9 * (std::abs(bar) + scale)) return;
     }
     offerMatch(best, k, {ids_[row], double(product) / (norms_[row] * query_norm)}, admit);
-  });
+  };
+  if (const auto lists = probedLists(code); !lists.empty())
+    eachListedProduct(code, lists, offer);
+  else
+    eachProduct(code, offer);
   return best;
 }
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "memory/location_table.h"
+#include "memory/place_lists.h"
 
 namespace placedb {
 
@@ -30,6 +31,29 @@ class PlaceIndex {
   // Threads that share a scan of the codes (the caller's included); any count gives the same
   // answers, since each thread only fills its own rows' products.
   void setThreads(int threads) { threads_ = threads; }
+
+  // From `rows` codes on (0: never), search() scans an inverted file (place_lists.h) instead of
+  // every code: kListRows codes a list at training, and a search probes one list in
+  // kProbeShare. Its centres are trained on the codes of the `rows` lowest location ids, which
+  // are the same set whenever the training happens (codes are never removed, and a writer's
+  // ids only grow), so a resumed run's index is the uninterrupted run's. See probedLists().
+  //
+  // Why these two: by the cost model, a search reads rows/kListRows centres and about
+  // 1/kProbeShare of the codes, 1,280 instead of 16,384 codes at rows = 16,384, and k-means over
+  // the training codes costs 8 rounds of rows x rows/kListRows products, once. Measured on the
+  // 100k-frame scale map (bench/scale/README.md, placedb_place_lists_recall), these codes have
+  // little cluster structure: the nearest 1/16 of the lists hold 8 % of the codes and 64 % of
+  // the exact top 5, and 99 % of it takes half the lists (58 % of the codes). Hence the
+  // engine's default, place_lists_from = 0.
+  // list_rows and probe_share other than these are for bench/scale/place_lists_recall only.
+  void setListsFrom(std::size_t rows, std::size_t list_rows = kListRows,
+                    std::size_t probe_share = kProbeShare);
+  static constexpr std::size_t kListRows = 64;
+  static constexpr std::size_t kProbeShare = 16;
+  // The lists and the lists probed, once trained (0 before).
+  std::size_t lists() const { return lists_ ? lists_->lists() : 0; }
+  std::size_t probes() const;
+  const PlaceLists* placeLists() const { return lists_ ? &*lists_ : nullptr; }
 
   // Adds or replaces a location's code; every code of one index has the same length.
   void add(std::int64_t location, const std::vector<std::int8_t>& code);
@@ -70,6 +94,11 @@ class PlaceIndex {
   std::vector<std::int64_t> sum_;       // of every code, dim_ values: exact whatever the order
   std::size_t rows_with_min_byte_ = 0;  // rows not withinEncodedRange (no encoder makes one)
   int threads_ = 1;
+  std::size_t lists_from_ = 0, list_rows_ = kListRows, probe_share_ = kProbeShare;
+  mutable std::optional<PlaceLists> lists_;  // trained by the first search from lists_from_ on
+
+  // The lists a search scans (training them first), or none below lists_from_.
+  std::vector<std::size_t> probedLists(const std::vector<std::int8_t>& code) const;
 
   const std::int8_t* rowData(std::size_t row) const {
     return chunks_[row / kChunkRows].get() + (row % kChunkRows) * dim_;
@@ -81,6 +110,10 @@ class PlaceIndex {
   // The byte product of `code` with every row, handed to visit(row, product) in row order.
   template <typename Visit>
   void eachProduct(const std::vector<std::int8_t>& code, Visit&& visit) const;
+  // The same for the rows of the given lists, list by list.
+  template <typename Visit>
+  void eachListedProduct(const std::vector<std::int8_t>& code,
+                         const std::vector<std::size_t>& lists, Visit&& visit) const;
 
   // The mean code and, per row, its dot product with the mean and its centred norm: rebuilt by
   // the first centred search after a change (one pass over the codes).
