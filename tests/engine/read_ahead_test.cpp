@@ -134,6 +134,39 @@ TEST_F(ReadAheadTest, DecisionsDoNotDependOnIt) {
   EXPECT_GT(retrieved, 0u) << "the run must bring places back from LTM to mean anything";
 }
 
+// The map file's open descriptors in this process: the writer's, and the read-ahead's own
+// connection once it has started.
+int descriptorsOf(const std::filesystem::path& file) {
+  int count = 0;
+  const auto target = std::filesystem::canonical(file);
+  for (const auto& fd : std::filesystem::directory_iterator("/proc/self/fd")) {
+    std::error_code error;
+    const auto linked = std::filesystem::read_symlink(fd.path(), error);
+    if (!error && linked == target) ++count;
+  }
+  return count;
+}
+
+TEST_F(ReadAheadTest, NothingInLongTermMemoryNothingRead) {
+  Options unbounded;  // wm_max 0: every place stays in WM, none is ever brought back
+  unbounded.read_ahead_links = 1;
+  auto map = Map::open(path_.string(), unbounded);
+  map->beginSession("read ahead");
+  for (std::size_t i = 0; i < 30; ++i) map->process(seq_->images[i], i, seq_->paths[i]);
+  EXPECT_EQ(descriptorsOf(path_), 1) << "only the writer's connection may hold the map";
+  map.reset();
+  // Once places are in LTM it does start (the counter-check of the above; the samples' first
+  // frames merge into few locations, so the run is as long as the one that brings places back).
+  removeMap(path_);
+  map = Map::open(path_.string(), smallMemory(1));
+  map->beginSession("read ahead");
+  for (std::size_t i = 0; i < 60; ++i) map->process(seq_->images[i], i, seq_->paths[i]);
+  // Its thread opens the connection on its first request, asynchronously.
+  for (int wait = 0; wait < 100 && descriptorsOf(path_) < 2; ++wait)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_EQ(descriptorsOf(path_), 2);
+}
+
 TEST_F(ReadAheadTest, TheWritersCloseStillRemovesTheLog) {
   mapFrames(20, smallMemory(1));  // the map closes as it goes out of scope
   EXPECT_FALSE(std::filesystem::exists(storage::walFile(path_.string())))

@@ -610,6 +610,9 @@ void MapImpl::readAhead(std::int64_t hypothesis) {
     read_ahead_.reset();
     return;
   }
+  // Only a place in long-term memory is ever read back: with none, every row it would read is
+  // one the frames never ask for, and its thread would take CPU from the frame's own.
+  if (tiers_->ltmSize() == 0) return;
   // The hypothesis first: the next frame brings back its LTM neighbours.
   std::vector<std::int64_t> places;
   if (hypothesis != kNewPlace) places.push_back(hypothesis);
