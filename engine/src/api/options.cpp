@@ -200,7 +200,8 @@ const std::vector<Row>& table() {
               "reading ahead: the places the next frame may bring back from LTM (this frame's "
               "hypothesis and its place-code search, ranked 3 x ltm_search deep) and those this "
               "many links from them are read on a thread of their own, so that the frame finds "
-              "them in the OS page cache (SQLite maps); 0 = off; decisions never depend on it"),
+              "them in the OS page cache (SQLite maps), once a place is in LTM; 0 = off; decisions "
+              "never depend on it"),
       integer("place_lists_from", &Options::place_lists_from, 0, 100000000, "0..1e8",
               "from this many place codes on, each frame's place-code search scans the codes of "
               "one in 16 of place_lists_from/64 coarse centres, those nearest the frame's (an "
