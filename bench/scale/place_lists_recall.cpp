@@ -56,12 +56,15 @@ struct Tally {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    fmt::print(stderr,
+  const bool help = argc == 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h");
+  if (argc < 2 || help) {
+    fmt::print(help ? stdout : stderr,
                "usage: {} MAP [--codes N] [--from F] [--list-rows R] [--probe-share S] "
-               "[--queries Q] [--k K] [--hnsw M:EFC:EF]\n",
+               "[--queries Q] [--k K] [--hnsw M:EFC:EF]\n"
+               "Top-k recall and time of the place-code lists (and hnswlib's graph, when built\n"
+               "with it) against the exact scan, over MAP's place codes; bench/scale/README.md.\n",
                argv[0]);
-    return 2;
+    return help ? 0 : 2;
   }
   std::size_t codes_wanted = 0, from = 16384, list_rows = placedb::PlaceIndex::kListRows,
               probe_share = placedb::PlaceIndex::kProbeShare, queries = 2000, k = 5;
@@ -88,8 +91,14 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  auto store = placedb::storage::openMapStore(argv[1], placedb::storage::OpenMode::kReadOnly);
-  auto records = store->placeCodes();  // by location id
+  std::vector<placedb::storage::PlaceCodeRecord> records;  // by location id
+  try {
+    records = placedb::storage::openMapStore(argv[1], placedb::storage::OpenMode::kReadOnly)
+                  ->placeCodes();
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "placedb_place_lists_recall: {}\n", e.what());
+    return 1;
+  }
   if (codes_wanted > 0 && codes_wanted < records.size()) records.resize(codes_wanted);
   placedb::PlaceIndex exact, lists;
   lists.setListsFrom(from, list_rows, probe_share);
