@@ -15,7 +15,6 @@
 #include "placedb/storage/storage_error.h"
 
 namespace placedb::storage::detail {
-namespace {
 
 // CRC-32C (Castagnoli): the polynomial LevelDB, RocksDB and iSCSI use. SSE4.2's crc32
 // instruction computes exactly this CRC, eight bytes at a time where Boost's table takes one:
@@ -62,6 +61,8 @@ class Crc32c {
 #endif
   boost::crc_optimal<32, 0x1EDC6F41, 0xFFFFFFFF, 0xFFFFFFFF, true, true> software_;
 };
+
+namespace {
 
 // Integers are summed as 8 little-endian bytes, so a sum does not depend on the host.
 void addInt(Crc32c& crc, std::int64_t value) {
@@ -178,35 +179,22 @@ std::uint32_t posteriorChecksum(std::int64_t location_id, double probability) {
   return crc.checksum();
 }
 
-namespace {
-
-void appendInt(std::string& bytes, std::int64_t value) {
-  const auto u = static_cast<std::uint64_t>(value);
-  for (int i = 0; i < 8; ++i) bytes.push_back(static_cast<char>(u >> (8 * i)));
+RefsDigest::RefsDigest(std::int64_t location_id) : sum_(std::make_unique<Crc32c>()) {
+  addInt(*sum_, location_id);
 }
-
-}  // namespace
-
-RefsDigest::RefsDigest(std::int64_t location_id) { appendInt(bytes_, location_id); }
+RefsDigest::RefsDigest(RefsDigest&&) noexcept = default;
+RefsDigest& RefsDigest::operator=(RefsDigest&&) noexcept = default;
+RefsDigest::~RefsDigest() = default;
 
 void RefsDigest::add(std::int64_t word_id, double x, double y, double size, double angle,
                      double response) {
-  // One append of the reference's 48 bytes: every keypoint load of a candidate reads a
-  // location's references through here, and a byte at a time cost more than the read.
-  unsigned char le[48];
-  std::int64_t values[6] = {word_id, 0, 0, 0, 0, 0};
-  const double reals[5] = {x, y, size, angle, response};
-  std::memcpy(values + 1, reals, sizeof reals);
-  for (int v = 0; v < 6; ++v)
-    for (int i = 0; i < 8; ++i)
-      le[8 * v + i] = static_cast<unsigned char>(static_cast<std::uint64_t>(values[v]) >> (8 * i));
-  bytes_.append(reinterpret_cast<const char*>(le), sizeof le);
+  addInt(*sum_, word_id);
+  for (double v : {x, y, size, angle, response}) addDouble(*sum_, v);
   ++count_;
 }
 
 std::uint32_t RefsDigest::value() const {
-  Crc32c crc;
-  crc.process_bytes(bytes_.data(), bytes_.size());
+  Crc32c crc = *sum_;  // the count ends the sum; more references may follow
   addInt(crc, count_);
   return crc.checksum();
 }

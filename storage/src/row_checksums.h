@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -55,16 +56,21 @@ std::uint32_t locationChecksum(std::int64_t id, std::int64_t session_id, std::in
 // The digest of a location's word references (schema 15, locations.refs_digest), so that a
 // reference deleted or added is found as a changed one is: its id, then every reference in
 // ordinal order (word id, then x, y, size, angle and response as the REALs stored), then their
-// number. Built row by row as they are written or read.
+// number. Summed row by row as they are written or read: every keypoint load of a candidate
+// reads a location's references through it.
+class Crc32c;
 class RefsDigest {
  public:
   explicit RefsDigest(std::int64_t location_id);
+  RefsDigest(RefsDigest&&) noexcept;
+  RefsDigest& operator=(RefsDigest&&) noexcept;
+  ~RefsDigest();
   void add(std::int64_t word_id, double x, double y, double size, double angle, double response);
   std::uint32_t value() const;
   std::int64_t count() const { return count_; }
 
  private:
-  std::string bytes_;
+  std::unique_ptr<Crc32c> sum_;  // of the id and the references so far
   std::int64_t count_ = 0;
 };
 std::uint32_t refsDigest(std::int64_t location_id, const std::vector<WordRef>& refs);
