@@ -1,7 +1,8 @@
 // Where a map must accept nothing: walks that never come back to a place. Each dev set cut before
-// its first revisit, and synthetic walks past one poster that stands at two places, with the
-// defaults and with working memory capped. Every closure accepted there is false, and one false
-// closure breaks a SLAM back end's map, so each test fails on the first one and names it.
+// its first revisit, synthetic walks past one poster that stands at two places and down a
+// corridor whose doors and lockers repeat, with the defaults and with working memory capped.
+// Every closure accepted there is false, and one false closure breaks a SLAM back end's map, so
+// each test fails on the first one and names it.
 // bench/quality/precision.py runs the full cuts and the larger synthetic walks.
 #include <gtest/gtest.h>
 
@@ -102,6 +103,26 @@ INSTANTIATE_TEST_SUITE_P(SmallAndLargeCamera, LookalikeWalk,
                            return std::to_string(info.param.width) + "x" +
                                   std::to_string(info.param.height);
                          });
+
+// A single pass down a corridor, 0.3 m a frame, where a door and a bank of lockers repeat on both
+// walls every 6 m (synthetic/lookalikes.h): every view agrees with every other one far beyond
+// chance, and looking down it the far end stays in view. No place of it is a revisit.
+TEST(CorridorWalk, DoorsAndLockersThatRepeatAlongItAreNotAPlace) {
+  synthetic::SyntheticOptions o = synthetic::sceneDefaults("corridor");
+  o.lookalike = "corridor";
+  o.frames = 200;
+  o.width = 960;
+  o.height = 540;
+  o.speed = 0.3;
+  const synthetic::SyntheticSequence walk(o);
+  ASSERT_TRUE(walk.groundTruth().empty());
+  std::vector<cv::Mat> images;
+  for (int i = 0; i < walk.size(); ++i) images.push_back(walk.render(i));
+  EXPECT_EQ(acceptedClosures(images, "corridor_walk", Options()), std::vector<std::string>());
+  EXPECT_EQ(acceptedClosures(images, "corridor_walk_capped", capped(30)),
+            std::vector<std::string>())
+      << "wm_max=30";
+}
 
 }  // namespace
 }  // namespace placedb::testing

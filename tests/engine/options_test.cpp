@@ -195,6 +195,11 @@ TEST(Options, StoredSettingsWithoutALaterSettingKeepWhatTheSessionRan) {
   EXPECT_EQ(Options::fromStoredSettings(stored).geometry_min_scene_share, 0.0);
   EXPECT_TRUE(Options::fromSettings(stored).geometry_count_candidates);
   EXPECT_EQ(Options::fromSettings(stored).geometry_min_scene_share, 0.25);
+  // ... and one stored before a closure had to be what the frame's way here singles out.
+  stored = Options().toSettings();
+  stored.erase("geometry_way_here_checks");
+  EXPECT_EQ(Options::fromStoredSettings(stored).geometry_way_here_checks, 0);
+  EXPECT_EQ(Options::fromSettings(stored).geometry_way_here_checks, 4);
 }
 
 }  // namespace

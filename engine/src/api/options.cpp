@@ -256,6 +256,11 @@ const std::vector<Row>& table() {
            "a place that passes the check on its own must also cover this share of the scene "
            "the frame shares with its own previous view (its pairs on planes, corrected for "
            "their number), or it shares an object, not the place; 0 = off"),
+      integer("geometry_way_here_checks", &Options::geometry_way_here_checks, 0, 1000, "0..1000",
+              "a closure that starts a run is refused when the frame agrees with its whole way "
+              "back to the place (one scene, never left), or when one of this many places of "
+              "that way, the most similar first, agrees about as well (a pattern that repeats "
+              "along the route, not the place); 0 = off"),
       integer("temporal_min_inliers", &Options::temporal_min_inliers, 0, 10000, "0..10000",
               "inliers rule: inliers that suffice for a hypothesis near the last accepted loop "
               "closure (see temporal_radius, temporal_max_gap); 0 = off"),
@@ -343,6 +348,7 @@ Options Options::fromStoredSettings(const std::map<std::string, std::string>& se
   before.geometry_max_error_diagonal = 0;
   before.geometry_count_candidates = false;
   before.geometry_min_scene_share = 0;
+  before.geometry_way_here_checks = 0;
   return fromSettings(settings, before);
 }
 

@@ -4,5 +4,6 @@ set(_placedb_decision_sources
   ${CMAKE_CURRENT_LIST_DIR}/agreeing_place.cpp
   ${CMAKE_CURRENT_LIST_DIR}/candidate_choice.cpp
   ${CMAKE_CURRENT_LIST_DIR}/closure_evidence.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/closure_run.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/closure_run.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/way_here.cpp)
 target_sources(placedb_engine PRIVATE ${_placedb_decision_sources})

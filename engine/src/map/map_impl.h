@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "decision/agreeing_place.h"
+#include "decision/way_here.h"
 #include "features/feature_extractor.h"
 #include "filter/bayes_filter.h"
 #include "filter/inverted_index.h"
@@ -124,6 +125,10 @@ class MapImpl final : public Map {
     // Set when the place passed the check but shares too little of the frame's scene
     // (scene_extent.h): an object, not the place. The frame is then refused.
     std::optional<SceneShare> object_only;
+    // Set when the closure is not what the frame's agreement singles out (way_here.h): the
+    // camera never left the place's scene, or a place of its way here agrees about as well.
+    // The frame is refused.
+    std::optional<WayHereRefusal> way_here;
   };
   // Links the frame's location to the accepted closure; one that passed on its own anchors the
   // closure run (closure_run.h).
@@ -133,8 +138,7 @@ class MapImpl final : public Map {
   // the one before its new location; 0 when there is none), against which a closure's share of
   // the scene is measured.
   Verified verifyHypothesis(const FilterOutcome& outcome, const Features& features,
-                            const std::vector<std::int64_t>& word_of_feature,
-                            const std::vector<LocationSimilarity>& similarities,
+                            const Quantised& q, const std::vector<LocationSimilarity>& similarities,
                             std::int64_t frame_id, LocationId own_view);
   // Why a hypothesis was not accepted, for the log and the map's hypotheses table.
   static std::string rejectionOf(const FilterOutcome& outcome, const Verified& verified);
@@ -144,6 +148,14 @@ class MapImpl final : public Map {
   LocationId traversalPredecessor(LocationId location) const;
   // The share of the frame's scene that an accepted place's comparison covers (scene_extent.h).
   SceneShare sceneOf(const GeometricResult& place, LocationId own_view, const GeometricView& query);
+  // The frame's traversal back from `own_view` (newest first) to the accepted place's
+  // surroundings (way_here.h); `reaches` tells whether it got there.
+  std::vector<LocationId> wayHere(LocationId accepted, LocationId own_view, bool& reaches) const;
+  // Why a closure that starts a run is not the place its agreement singles out (way_here.h);
+  // nothing when it is. `accepted_log10_nfa` is the evidence the acceptance rests on.
+  std::optional<WayHereRefusal> judgeWayHere(LocationId accepted, LocationId own_view,
+                                             const GeometricView& query, const Signature& signature,
+                                             double accepted_log10_nfa);
   // The WM locations that continue the closure run at this frame (closure_run.h), sorted; empty
   // when temporal consistency is off or the frame continues no run.
   std::vector<LocationId> nearLastClosure(std::int64_t frame_id) const;

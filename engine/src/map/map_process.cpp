@@ -241,6 +241,17 @@ std::string MapImpl::rejectionOf(const FilterOutcome& outcome, const Verified& v
         "scene: {} inliers of {} matches cover {:.0f} % of the frame's scene (an object, not "
         "the place)",
         verified.inliers, verified.matches, 100 * verified.object_only->share);
+  if (verified.way_here && verified.way_here->verdict == WayHereVerdict::kNeverLeft)
+    return fmt::format(
+        "way here: the frame agrees with all {} places of its way back to the place (one scene "
+        "all along, not a revisit)",
+        verified.way_here->way);
+  if (verified.way_here)
+    return fmt::format(
+        "way here: location {} of the frame's way here agrees with NFA 1e{:.1f} (best of {}) "
+        "against the closure's 1e{:.1f} (a pattern that repeats along the route, not the place)",
+        verified.way_here->location, verified.way_here->result.log10_nfa,
+        verified.way_here->impostors, verified.way_here->accepted_log10_nfa);
   if (verified.passed) return toString(outcome.reason);
   const std::string over =
       verified.places > 1 ? fmt::format(" over {} places", verified.places) : std::string();
@@ -267,8 +278,8 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
   // The reported hypothesis is chosen among the filter's best and its competitors by the
   // geometric check.
   const auto verify_start = Clock::now();
-  const Verified verified = verifyHypothesis(outcome, features, q.word_of_feature, similarities,
-                                             frameClock(r.frame_id), ownViewOf(r));
+  const Verified verified =
+      verifyHypothesis(outcome, features, q, similarities, frameClock(r.frame_id), ownViewOf(r));
   // Measuring the pose is part of verification; it never changes the decision.
   std::optional<storage::ClosurePose> pose;
   if (options_.hasIntrinsics() && verified.location != kNewPlace && outcome.accepted &&

@@ -10,6 +10,7 @@
 
 #include "decision/candidate_choice.h"
 #include "decision/closure_evidence.h"
+#include "decision/way_here.h"
 #include "features/feature_options.h"
 #include "map/map_impl.h"
 #include "map/option_mapping.h"
@@ -170,8 +171,88 @@ SceneShare MapImpl::sceneOf(const GeometricResult& place, LocationId own_view,
   return sceneShare(place, own ? &*own : nullptr, agreementDistance(compare, query.image_size));
 }
 
+std::vector<LocationId> MapImpl::wayHere(LocationId accepted, LocationId own_view,
+                                         bool& reaches) const {
+  const auto inWm = [this](LocationId id) { return tiers_->isIn(id, Tier::kWm); };
+  std::set<LocationId> surroundings;
+  for (const auto& [id, depth] : graph_.withinLinks(accepted, 1, inWm, LinkWalk::kAnyLink))
+    surroundings.insert(id);
+  std::vector<LocationId> way;
+  LocationId l = own_view;
+  for (; l && !surroundings.count(l); l = traversalPredecessor(l)) way.push_back(l);
+  reaches = l != 0;
+  return way;
+}
+
+std::optional<WayHereRefusal> MapImpl::judgeWayHere(LocationId accepted, LocationId own_view,
+                                                    const GeometricView& query,
+                                                    const Signature& signature,
+                                                    double accepted_log10_nfa) {
+  bool reaches = false;
+  const std::vector<LocationId> way = wayHere(accepted, own_view, reaches);
+  const GeometricCheckSettings compare = toGeometricCheckSettings(options_);
+  // Each place of the way is asked once, and on its own (it is no candidate of the frame),
+  // whether any model agrees beyond chance: the fit may stop at the first that does.
+  GeometricCheckSettings beyond_chance = compare;
+  beyond_chance.max_nfa = 1;
+  // Both walks check ahead on another core (paired_checks.h): the frame's from its end of the
+  // way, the place's from the other.
+  const int threads = resolveThreadCount(options_.threads);
+  const auto prepare = [this](LocationId id) -> std::optional<GeometricView> {
+    const CachedKeypoints& keypoints = keypointsOf(id);
+    if (keypoints.points.empty()) return std::nullopt;
+    return viewOf(keypoints);
+  };
+  const auto agreement = [&](const GeometricView& view) {
+    return checkGeometry(query, view, beyond_chance);
+  };
+  PairedChecks from_frame(way, threads, prepare, agreement);
+  PairedChecks from_place(std::vector<LocationId>(way.rbegin(), way.rend()), threads, prepare,
+                          agreement);
+  std::map<std::size_t, bool> unrelated_at;
+  bool place_side = false;
+  const Unrelated unrelated = [&](std::size_t i) {
+    if (auto it = unrelated_at.find(i); it != unrelated_at.end()) return it->second;
+    const auto g = place_side ? from_place(way[i]) : from_frame(way[i]);
+    return unrelated_at[i] = !g || g->log10_nfa > 0;
+  };
+  WayHereRefusal refusal;
+  refusal.accepted_log10_nfa = accepted_log10_nfa;
+  refusal.way = static_cast<int>(way.size());
+  const std::size_t end = surroundingsEnd(way.size(), unrelated);
+  if (end == way.size()) {
+    if (!reaches) return std::nullopt;
+    refusal.verdict = WayHereVerdict::kNeverLeft;
+    return refusal;
+  }
+  place_side = true;
+  const std::size_t begin =
+      reaches ? placeSurroundingsBegin(way.size(), end, unrelated) : way.size() - 1;
+  const std::vector<LocationId> between(way.begin() + static_cast<std::ptrdiff_t>(end),
+                                        way.begin() + static_cast<std::ptrdiff_t>(begin) + 1);
+  const std::set<LocationId> among(between.begin(), between.end());
+  const std::vector<LocationId> impostors = mostSimilar(
+      between, index_.similarities(signature, [&among](LocationId id) { return among.count(id); }),
+      options_.geometry_way_here_checks);
+  PairedChecks compared(impostors, threads, prepare, [&](const GeometricView& view) {
+    return compareGeometry(query, view, compare);
+  });
+  for (LocationId id : impostors) {
+    std::optional<GeometricResult> g = compared(id);
+    if (g && refutes(accepted_log10_nfa, g->log10_nfa, static_cast<int>(impostors.size()),
+                     options_.geometry_max_nfa)) {
+      refusal.verdict = WayHereVerdict::kRepeated;
+      refusal.location = id;
+      refusal.result = std::move(*g);
+      refusal.impostors = static_cast<int>(impostors.size());
+      return refusal;
+    }
+  }
+  return std::nullopt;
+}
+
 MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const Features& features,
-                                            const std::vector<std::int64_t>& word_of_feature,
+                                            const Quantised& q,
                                             const std::vector<LocationSimilarity>& similarities,
                                             std::int64_t frame_id, LocationId own_view) {
   Verified v;
@@ -245,7 +326,7 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   query.descriptors = features.descriptors;
   query.points.reserve(features.size());
   for (const auto& k : features.keypoints) query.points.emplace_back(k.x, k.y);
-  query.words = word_of_feature;
+  query.words = q.word_of_feature;
   query.image_size = features.image_size;
   query.codes = std::make_shared<const DescriptorCodes>(
       quantiseDescriptors(features.descriptors, kQueryCodeLevels));
@@ -318,6 +399,17 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
       v.passed = false;
       v.object_only = scene;
       v.evidence = ClosureEvidence{};  // an object's agreement carries no run either
+    }
+  }
+  // A closure that starts a run must be the place its agreement singles out (way_here.h); one
+  // that continues the run leans on that start, as the relaxed rule does.
+  if (v.passed && agreeing && options_.geometry_way_here_checks > 0 &&
+      options_.geometry_rule != GeometryRule::kInliers &&
+      !std::binary_search(near.begin(), near.end(), reported)) {
+    v.way_here = judgeWayHere(reported, own_view, query, q.signature, v.evidence.log10_nfa);
+    if (v.way_here) {
+      v.passed = false;
+      v.evidence = ClosureEvidence{};  // a pattern's agreement carries no run either
     }
   }
   v.location = reported;
