@@ -384,6 +384,7 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   }
   // The place an accepted closure names: the accepted one or a traversal neighbour that agrees
   // with the frame on more pairs (agreeing_place.h). Its evidence stays the decision's.
+  const LocationId accepted_place = reported;
   std::optional<AgreeingPlace> agreeing;
   if (outcome.accepted && v.passed) agreeing = agreeingPlace(reported, query);
   if (agreeing && agreeing->location != reported) {
@@ -402,10 +403,11 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
     }
   }
   // A closure that starts a run must be the place its agreement singles out (way_here.h); one
-  // that continues the run leans on that start, as the relaxed rule does.
-  if (v.passed && agreeing && options_.geometry_way_here_checks > 0 &&
+  // that continues the run (accepted within its reach, on the relaxed rule or not) leans on that
+  // start, wherever the agreeing neighbour then names it.
+  if (v.passed && agreeing && !v.temporal && options_.geometry_way_here_checks > 0 &&
       options_.geometry_rule != GeometryRule::kInliers &&
-      !std::binary_search(near.begin(), near.end(), reported)) {
+      !std::binary_search(near.begin(), near.end(), accepted_place)) {
     v.way_here = judgeWayHere(reported, own_view, query, q.signature, v.evidence.log10_nfa);
     if (v.way_here) {
       v.passed = false;
