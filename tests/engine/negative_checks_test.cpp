@@ -69,6 +69,18 @@ INSTANTIATE_TEST_SUITE_P(BeforeTheFirstRevisit, DevSetCut,
                                            Cut{"lip6_outdoor", 460}),
                          [](const auto& info) { return std::string(info.param.dataset); });
 
+// A synthetic walk that never comes back accepts no closure, with the defaults and with working
+// memory capped to a bound the walk's 200 frames cross.
+void expectNoClosure(const synthetic::SyntheticSequence& walk, const std::string& name) {
+  SCOPED_TRACE(name);
+  ASSERT_TRUE(walk.groundTruth().empty());
+  std::vector<cv::Mat> images;
+  for (int i = 0; i < walk.size(); ++i) images.push_back(walk.render(i));
+  EXPECT_EQ(acceptedClosures(images, name, Options()), std::vector<std::string>());
+  EXPECT_EQ(acceptedClosures(images, name + "_capped", capped(30)), std::vector<std::string>())
+      << "wm_max=30";
+}
+
 struct Camera {
   int width, height;
   double pitch_degrees;  // the small camera looks further down: its view is taller
@@ -88,13 +100,7 @@ TEST_P(LookalikeWalk, OnePosterAtTwoPlacesIsNotAPlace) {
   o.pitch_degrees = GetParam().pitch_degrees;
   o.camera_height = 1.5;
   o.speed = 0.5;
-  const synthetic::SyntheticSequence walk(o);
-  ASSERT_TRUE(walk.groundTruth().empty());
-  std::vector<cv::Mat> images;
-  for (int i = 0; i < walk.size(); ++i) images.push_back(walk.render(i));
-  EXPECT_EQ(acceptedClosures(images, "poster_walk", Options()), std::vector<std::string>());
-  EXPECT_EQ(acceptedClosures(images, "poster_walk_capped", capped(30)), std::vector<std::string>())
-      << "wm_max=30";
+  expectNoClosure(synthetic::SyntheticSequence(o), "poster_walk");
 }
 
 INSTANTIATE_TEST_SUITE_P(SmallAndLargeCamera, LookalikeWalk,
@@ -114,14 +120,7 @@ TEST(CorridorWalk, DoorsAndLockersThatRepeatAlongItAreNotAPlace) {
   o.width = 960;
   o.height = 540;
   o.speed = 0.3;
-  const synthetic::SyntheticSequence walk(o);
-  ASSERT_TRUE(walk.groundTruth().empty());
-  std::vector<cv::Mat> images;
-  for (int i = 0; i < walk.size(); ++i) images.push_back(walk.render(i));
-  EXPECT_EQ(acceptedClosures(images, "corridor_walk", Options()), std::vector<std::string>());
-  EXPECT_EQ(acceptedClosures(images, "corridor_walk_capped", capped(30)),
-            std::vector<std::string>())
-      << "wm_max=30";
+  expectNoClosure(synthetic::SyntheticSequence(o), "corridor_walk");
 }
 
 }  // namespace
