@@ -159,9 +159,8 @@ struct Options {
   static Options fromSettings(const std::map<std::string, std::string>& settings);
   // A session's settings as a map stored them: a setting added after that session began takes
   // the value that reproduces it (feature_target 0, feature_retry 0.5, geometry_max_error_diagonal
-  // 0, geometry_count_candidates false, geometry_min_scene_share 0,
-  // geometry_way_here_checks 0), so a resumed session decides
-  // as it did.
+  // 0, geometry_count_candidates false, geometry_min_scene_share 0, geometry_way_here_checks 0),
+  // so a resumed session decides as it did.
   static Options fromStoredSettings(const std::map<std::string, std::string>& settings);
   std::map<std::string, std::string> toSettings() const;
   void validate() const;

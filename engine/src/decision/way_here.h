@@ -12,10 +12,10 @@
 // reaches from it in working memory). Along it:
 //
 //  - The frame's surroundings come first: places it still sees, which agree with it. They end
-//    where two places in a row show no agreement beyond chance (log10 NFA >= 0, the check alone):
-//    one such place is no proof the camera left, since a blurred view or one with few keypoints
-//    fails alone. The accepted place's own surroundings (its approach, seen again from the frame)
-//    are found the same way from the far end.
+//    where two places in a row show no agreement beyond chance (no model at NFA 1 or below, each
+//    checked alone): one such place is no proof the camera left, since a blurred view or one
+//    with few keypoints fails alone. The accepted place's own surroundings (its approach, seen
+//    again from the frame) are found the same way from the far end.
 //  - Never left: when the way reaches the accepted place without two such places in a row, the
 //    frame saw that scene all along (looking down a long corridor, the far end stays in view).
 //    That is one visit, not a revisit, and the closure is refused. A frame whose way does not

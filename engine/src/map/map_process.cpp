@@ -243,8 +243,8 @@ std::string MapImpl::rejectionOf(const FilterOutcome& outcome, const Verified& v
         verified.inliers, verified.matches, 100 * verified.object_only->share);
   if (verified.way_here && verified.way_here->verdict == WayHereVerdict::kNeverLeft)
     return fmt::format(
-        "way here: the frame agrees with all {} places of its way back to the place (one scene "
-        "all along, not a revisit)",
+        "way here: no two places in a row of the {} on the frame's way back to the place are "
+        "unrelated to it (one scene all along, not a revisit)",
         verified.way_here->way);
   if (verified.way_here)
     return fmt::format(
