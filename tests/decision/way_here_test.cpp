@@ -66,21 +66,41 @@ TEST(WayHere, TheMostSimilarPlacesComeFirstTiesToTheNewer) {
   EXPECT_TRUE(mostSimilar({3, 4}, similarities, 0).empty());
 }
 
+TEST(WayHere, TheMoreSimilarAnImpostorTheLessItIsCounted) {
+  EXPECT_EQ(impostorTries(1, 0), 2);
+  EXPECT_EQ(impostorTries(2, 0), 6);
+  EXPECT_EQ(impostorTries(8, 0), 72);
+  double weights = 0;
+  for (int j = 1; j <= 1000; ++j) weights += 1 / impostorTries(j, 0);
+  EXPECT_LT(weights, 1) << "however many are compared, at most one false alarm in all";
+  EXPECT_EQ(impostorTries(1, 4), 4) << "sessions begun before: every one alike";
+  EXPECT_EQ(impostorTries(3, 4), 4);
+}
+
 TEST(WayHere, AnImpostorAtChanceLevelRefutesNothing) {
   // A closure accepted at the frame's bar (NFA 1e-3) stands against places of the way that agree
   // no better than chance, however many were compared.
-  EXPECT_FALSE(refutes(-3.0, 0.0, 1, 1e-3));
-  EXPECT_FALSE(refutes(-3.0, 2.5, 4, 1e-3));
-  EXPECT_FALSE(refutes(-3.0, -0.5, 4, 1e-3)) << "1e-0.5 among 4 is chance: 4 x 0.32 > 1";
+  EXPECT_FALSE(refutes(-3.0, 0.0, 2, 1e-3));
+  EXPECT_FALSE(refutes(-3.0, 2.5, 6, 1e-3));
+  EXPECT_FALSE(refutes(-3.0, -0.5, 6, 1e-3)) << "1e-0.5 as the second is chance: 6 x 0.32 > 1";
 }
 
 TEST(WayHere, AnImpostorAsStrongAsThePlaceRefutesIt) {
   EXPECT_TRUE(refutes(-5.0, -5.0, 1, 1e-3));
   EXPECT_TRUE(refutes(-11.0, -9.7, 4, 1e-3)) << "1e-11 is not 1e3 x stronger than 4 x 1e-9.7";
-  EXPECT_FALSE(refutes(-15.2, -9.7, 4, 1e-3)) << "1e-15.2 is";
-  EXPECT_FALSE(refutes(-25.2, -6.5, 4, 1e-3)) << "a facade seen from two streets, far weaker";
-  EXPECT_TRUE(refutes(-4.0, -1.5, 1, 1e-3)) << "the bar is now 1e-3 below the impostor";
-  EXPECT_FALSE(refutes(-4.0, -1.5, 100, 1e-3)) << "... counted over the places compared";
+  EXPECT_TRUE(refutes(-4.0, -1.5, 2, 1e-3)) << "the bar is now 1e-3 below the impostor";
+  EXPECT_FALSE(refutes(-4.0, -1.5, 100, 1e-3)) << "... counted as the false alarms it stands for";
+}
+
+TEST(WayHere, AnImpostorThatPassesTheBarItselfRefutesAlone) {
+  // A corridor at 160x120: the frame agrees with a place five door pitches back at 1e-15.2 and
+  // with one a pitch back at 1e-9.7. Both are the same picture; the second is known to be another
+  // place, so the first is no more singled out than it.
+  EXPECT_TRUE(refutes(-15.2, -9.7, 2, 1e-3));
+  EXPECT_TRUE(refutes(-25.2, -6.5, 72, 1e-3)) << "72 x 1e-6.5 still passes 1e-3";
+  EXPECT_FALSE(refutes(-25.2, -4.5, 72, 1e-3)) << "72 x 1e-4.5 does not, and is far weaker";
+  EXPECT_FALSE(refutes(-15.2, -9.7, 4, 1e-3, false))
+      << "sessions begun before: only an impostor near the place's own strength refutes";
 }
 
 }  // namespace

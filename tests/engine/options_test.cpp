@@ -199,7 +199,14 @@ TEST(Options, StoredSettingsWithoutALaterSettingKeepWhatTheSessionRan) {
   stored = Options().toSettings();
   stored.erase("geometry_way_here_checks");
   EXPECT_EQ(Options::fromStoredSettings(stored).geometry_way_here_checks, 0);
-  EXPECT_EQ(Options::fromSettings(stored).geometry_way_here_checks, 4);
+  EXPECT_EQ(Options::fromSettings(stored).geometry_way_here_checks, 8);
+  // ... and one stored while its places were all counted alike.
+  stored = Options().toSettings();
+  stored["geometry_way_here_checks"] = "4";
+  stored.erase("geometry_way_here_ranked");
+  EXPECT_EQ(Options::fromStoredSettings(stored).geometry_way_here_checks, 4);
+  EXPECT_FALSE(Options::fromStoredSettings(stored).geometry_way_here_ranked);
+  EXPECT_TRUE(Options::fromSettings(stored).geometry_way_here_ranked);
 }
 
 }  // namespace

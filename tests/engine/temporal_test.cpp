@@ -14,6 +14,7 @@
 #include <string>
 
 #include "engine_fixture.h"
+#include "synthetic/synthetic_sequence.h"
 
 namespace placedb::testing {
 namespace {
@@ -263,6 +264,37 @@ TEST(ClosureRunGaps, TheWayHereJudgesTheStartsOfRunsOnly) {
   for (std::size_t i = 0; i < frames.size(); ++i)
     EXPECT_NE(frames[i].rejected.rfind("way here", 0), 0u)
         << "frame " << i << ": " << frames[i].rejected;
+}
+
+// A refutation, like a closure run, carries over to the next frames (way_here.h), so it lives in
+// the map's engine state: closed and reopened between a refusal and the frame that continues it,
+// the corridor's single pass decides exactly as in one go.
+TEST(WayHereRefutations, CarryOverAStopAndResumeExactly) {
+  synthetic::SyntheticOptions o = synthetic::sceneDefaults("corridor");
+  o.lookalike = "corridor";
+  o.frames = 200;
+  o.width = 160;
+  o.height = 120;
+  o.hfov_degrees = 95;
+  o.speed = 0.3;
+  const synthetic::SyntheticSequence walk(o);
+  Sequence seq;
+  for (int i = 0; i < walk.size(); ++i) {
+    seq.images.push_back(walk.render(i));
+    seq.paths.push_back("corridor/" + std::to_string(i) + ".png");
+  }
+  const auto straight = mapFrames(seq, "corridor", "RefutationsStraight", Options(), {});
+  std::set<std::size_t> stops;
+  for (std::size_t i = 1; i < straight.size(); ++i)
+    if (straight[i].rejected.find("was refused as a pattern") != std::string::npos)
+      stops.insert(i - 1);
+  ASSERT_FALSE(stops.empty()) << "the corridor continues refutations";
+  const auto resumed = mapFrames(seq, "corridor", "RefutationsResumed", Options(), stops);
+  ASSERT_EQ(resumed.size(), straight.size());
+  for (std::size_t i = 0; i < straight.size(); ++i) {
+    EXPECT_EQ(resumed[i].accepted, straight[i].accepted) << "frame " << i;
+    EXPECT_EQ(resumed[i].rejected, straight[i].rejected) << "frame " << i;
+  }
 }
 
 TEST(TemporalOptions, RangesAndRoundTrip) {

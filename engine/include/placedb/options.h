@@ -118,7 +118,11 @@ struct Options {
   // frame agrees with its whole way back to the place (one scene, never left), or when one of
   // this many places of its way here, the most similar first, agrees about as well (a pattern
   // that repeats along the route; engine/src/decision/way_here.h); 0 = off.
-  int geometry_way_here_checks = 4;
+  int geometry_way_here_checks = 8;
+  // The places compared weighed by their rank, an earlier visit of the place no impostor, an
+  // impostor that passes the bar refuting alone, and a refutation carrying over to the next
+  // frames that claim the place (way_here.h); false: as sessions begun before it judged.
+  bool geometry_way_here_ranked = true;
 
   // --- temporal consistency (iBoW-LCD's islands; RTAB-Map's closures that follow the graph) ---
   // A hypothesis that misses the check's rule still passes a relaxed one (temporal_min_inliers,
@@ -159,8 +163,8 @@ struct Options {
   static Options fromSettings(const std::map<std::string, std::string>& settings);
   // A session's settings as a map stored them: a setting added after that session began takes
   // the value that reproduces it (feature_target 0, feature_retry 0.5, geometry_max_error_diagonal
-  // 0, geometry_count_candidates false, geometry_min_scene_share 0, geometry_way_here_checks 0),
-  // so a resumed session decides as it did.
+  // 0, geometry_count_candidates false, geometry_min_scene_share 0, geometry_way_here_checks 0,
+  // geometry_way_here_ranked false), so a resumed session decides as it did.
   static Options fromStoredSettings(const std::map<std::string, std::string>& settings);
   std::map<std::string, std::string> toSettings() const;
   void validate() const;

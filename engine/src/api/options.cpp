@@ -261,6 +261,12 @@ const std::vector<Row>& table() {
               "back to the place (one scene, never left), or when one of this many places of "
               "that way, the most similar first, agrees about as well (a pattern that repeats "
               "along the route, not the place); 0 = off"),
+      boolean("geometry_way_here_ranked", &Options::geometry_way_here_ranked,
+              "those places weighed by their similarity rank (the j-th compared counts as j(j+1) "
+              "tries, so more places compared only adds tests), an earlier visit of the place "
+              "joined to it by a loop closure none of them, one that passes the bar itself "
+              "refuting alone, and a refutation holding for the next frames that claim the "
+              "place again; false: as sessions begun before it"),
       integer("temporal_min_inliers", &Options::temporal_min_inliers, 0, 10000, "0..10000",
               "inliers rule: inliers that suffice for a hypothesis near the last accepted loop "
               "closure (see temporal_radius, temporal_max_gap); 0 = off"),
@@ -349,6 +355,7 @@ Options Options::fromStoredSettings(const std::map<std::string, std::string>& se
   before.geometry_count_candidates = false;
   before.geometry_min_scene_share = 0;
   before.geometry_way_here_checks = 0;
+  before.geometry_way_here_ranked = false;
   return fromSettings(settings, before);
 }
 

@@ -46,10 +46,24 @@ std::vector<LocationId> mostSimilar(const std::vector<LocationId>& places,
   return out;
 }
 
-bool refutes(double accepted_log10_nfa, double impostor_log10_nfa, int impostors, double max_nfa) {
-  const double chance =
-      std::min(0.0, impostor_log10_nfa + std::log10(static_cast<double>(std::max(1, impostors))));
-  return accepted_log10_nfa - chance > std::log10(max_nfa);
+bool withinRefutation(const RefutedPlace& refuted, std::int64_t frame, std::int64_t session,
+                      int max_gap) {
+  return refuted.location != 0 && refuted.session == session && frame > refuted.frame &&
+         frame - refuted.frame <= max_gap;
+}
+
+double impostorTries(int rank, int uniform) {
+  if (uniform > 0) return uniform;
+  const double j = std::max(1, rank);
+  return j * (j + 1);
+}
+
+bool refutes(double accepted_log10_nfa, double impostor_log10_nfa, double tries, double max_nfa,
+             bool passing_refutes) {
+  const double bar = std::log10(max_nfa);
+  const double impostor = impostor_log10_nfa + std::log10(std::max(1.0, tries));
+  if (passing_refutes && impostor <= bar) return true;
+  return accepted_log10_nfa - std::min(0.0, impostor) > bar;
 }
 
 }  // namespace placedb

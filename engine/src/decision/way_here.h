@@ -20,18 +20,32 @@
 //    frame saw that scene all along (looking down a long corridor, the far end stays in view).
 //    That is one visit, not a revisit, and the closure is refused. A frame whose way does not
 //    reach the place (another session's, or one beyond the places in memory) is not judged so.
-//  - Repeated: between the two surroundings lie places that are not the frame's place. The
-//    `count` of them most similar to the frame by eq. 5 (the ones a repeated pattern makes look
-//    alike) are compared with it; the best of them sets the chance level the accepted place is
-//    measured against: an impostor at NFA m, found among k tries, is a false alarm of k m, and
-//    the acceptance's evidence e (its log10 NFA, a run's when it passed as one) must beat
-//    min(1, k m) by the factor it must beat chance by: e - min(0, log10(k m)) <= log10(max_nfa).
-//    An impostor at chance level or worse changes nothing; one as strong as the place refuses it.
+//  - Repeated: between the two surroundings lie places that are not the frame's place, save
+//    the ones the map already joins to it (a loop closure from the way to the place's own
+//    stretch: an earlier visit of it, passed again on the way here). Up to `count` of them, the
+//    most similar to the frame by eq. 5 first (the ones a repeated pattern makes look alike),
+//    are compared with it. The j-th compared is weighed 1 / (j (j + 1)): agreeing at NFA m it is
+//    a false alarm of j (j + 1) m. The weights sum to less than 1 however many are compared, so
+//    a longer list only adds tests and never asks more of the first ones: `count` bounds the
+//    cost, not the evidence (with equal weights 1 / count, a longer list let strong impostors
+//    through). An impostor refutes the closure when it passes the frame's bar itself
+//    (j (j + 1) m <= max_nfa: a place the claim makes another place would be accepted too, so
+//    the agreement singles out no place), or when the acceptance's evidence e (its log10 NFA, a
+//    run's when it passed as one) does not beat min(1, j (j + 1) m) by the factor the bar asks
+//    of chance: e - min(0, log10(j (j + 1) m)) > log10(max_nfa). An impostor at chance level or
+//    worse changes nothing.
 //
 // Only a closure that starts a run is judged: one that continues the run of the previous frames'
-// closures leans on a start that was. `count` bounds the cost of a judgement; the chance level
-// counts every place it compares.
+// closures leans on a start that was.
+//
+// Refutations come in runs too. The next frames see nearly the same view and agree with the
+// refuted place again, a frame further on, while the way's views stay where their locations were
+// stored: the impostor that matched one frame's offset from the pattern can miss the next one's.
+// Their agreement is the refuted one measured again, so a frame that claims a place within a
+// closure run's reach of the refuted one (temporal_radius links, up to temporal_max_gap frames
+// later) is refused with it, and carries the refutation on.
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <vector>
 
@@ -44,15 +58,30 @@ namespace placedb {
 enum class WayHereVerdict {
   kNeverLeft,  // the frame agrees with its whole way back to the place
   kRepeated,   // a place of the way here agrees about as well as the accepted one
+  kContinued,  // the frame claims a place next to one refuted as a pattern just before
 };
+
+// The newest place refused as a pattern (kRepeated or kContinued) and when.
+struct RefutedPlace {
+  LocationId location = 0;  // 0 = none
+  std::int64_t frame = 0;   // the refusing frame, on the frame clock
+  std::int64_t session = 0;
+};
+
+// Whether a frame of `session` at `frame` is near enough in time to continue `refuted`.
+bool withinRefutation(const RefutedPlace& refuted, std::int64_t frame, std::int64_t session,
+                      int max_gap);
 
 struct WayHereRefusal {
   WayHereVerdict verdict = WayHereVerdict::kRepeated;
-  LocationId location = 0;        // kRepeated: the place of the way here that agrees
+  LocationId location = 0;        // kRepeated: the place of the way here that agrees;
+                                  // kContinued: the place refuted before
   GeometricResult result;         // kRepeated: its comparison
   int impostors = 0;              // kRepeated: places of the way here compared
+  double tries = 0;               // kRepeated: the false alarms it stands for (impostorTries)
   double accepted_log10_nfa = 0;  // the evidence the acceptance rested on
   int way = 0;                    // places on the way here
+  std::int64_t frames_since = 0;  // kContinued: frames since that place was refused
 };
 
 // Is place i of the way (0 = newest) without agreement with the frame beyond chance?
@@ -72,8 +101,16 @@ std::size_t placeSurroundingsBegin(std::size_t size, std::size_t end, const Unre
 std::vector<LocationId> mostSimilar(const std::vector<LocationId>& places,
                                     const std::vector<LocationSimilarity>& similarities, int count);
 
-// Whether an impostor at `impostor_log10_nfa`, the best of `impostors` places compared, refutes
-// an acceptance whose evidence is `accepted_log10_nfa` (see above).
-bool refutes(double accepted_log10_nfa, double impostor_log10_nfa, int impostors, double max_nfa);
+// The false alarms an impostor at NFA m stands for, as a multiple of m, when it is the `rank`-th
+// place compared (1 = the most similar): rank (rank + 1). `uniform` > 0: every one alike, as
+// many as were compared (sessions begun before the ranked weights, Options).
+double impostorTries(int rank, int uniform);
+
+// Whether an impostor at `impostor_log10_nfa`, counted as `tries` false alarms (impostorTries),
+// refutes an acceptance whose evidence is `accepted_log10_nfa` (see above). `passing_refutes`:
+// an impostor that passes the bar itself refutes whatever the acceptance's evidence (false for
+// sessions begun before it).
+bool refutes(double accepted_log10_nfa, double impostor_log10_nfa, double tries, double max_nfa,
+             bool passing_refutes = true);
 
 }  // namespace placedb

@@ -39,6 +39,11 @@ void EngineCounters::save(storage::MapStore& store) const {
                       {"evidence_frames", closure_evidence.frames},
                       {"next_wm_age", next_wm_age}};
   if (tiers_digest != 0) j["tiers_digest"] = tiers_digest;
+  if (refuted.location != 0) {
+    j["refuted_location"] = refuted.location;
+    j["refuted_frame"] = refuted.frame;
+    j["refuted_session"] = refuted.session;
+  }
   // Only where a server map's writer set them: a file's counters stay as they were.
   const std::pair<const char*, std::int64_t> fleet[] = {{"frame_block_end", frame_block_end},
                                                         {"location_block_end", location_block_end},
@@ -76,6 +81,10 @@ bool EngineCounters::load(const storage::MapStore& store) {
     closure_evidence.log10_product = j.value("evidence_log10_product", 0.0);
     closure_evidence.log10_alternatives = j.value("evidence_log10_alternatives", 0.0);
     closure_evidence.frames = j.value("evidence_frames", 0);
+    // Absent while no place was refused as a pattern since the map was made.
+    refuted.location = j.value("refuted_location", std::int64_t{0});
+    refuted.frame = j.value("refuted_frame", std::int64_t{0});
+    refuted.session = j.value("refuted_session", std::int64_t{0});
     // Absent from maps made before schema 4, whose ages were the location ids.
     next_wm_age = j.value("next_wm_age", next_location_id);
     // Absent where no block was reserved (every file, and maps before schema 11).

@@ -7,6 +7,7 @@
 
 #include "decision/closure_evidence.h"
 #include "decision/closure_run.h"
+#include "decision/way_here.h"
 #include "placedb/storage/map_store.h"
 #include "vocabulary/vocabulary.h"
 
@@ -22,6 +23,7 @@ struct EngineCounters {
   double previous_score = 0;         // the filter's ratio-test memory
   ClosureRun closure_run;            // the loop closures a revisit is making
   ClosureEvidence closure_evidence;  // the check's evidence over the newest frames
+  RefutedPlace refuted;              // the newest place refused as a pattern (way_here.h)
   std::int64_t next_wm_age = 1;      // the memory tiers' age clock (next_location_id on older maps)
   // Where the blocks of ids this writer reserved end (map_fleet.cpp), 0: no block. A file's
   // writer hands ids out without one; a writer of a server map reserves blocks, since other

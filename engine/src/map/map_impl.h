@@ -1,11 +1,13 @@
 #pragma once
 // The engine behind placedb::Map: the per-frame pipeline over the storage, vocabulary, memory
 // tiers and Bayes filter. One MapImpl owns one open map file.
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -156,6 +158,14 @@ class MapImpl final : public Map {
   std::optional<WayHereRefusal> judgeWayHere(LocationId accepted, LocationId own_view,
                                              const GeometricView& query, const Signature& signature,
                                              double accepted_log10_nfa);
+  // The refusal of a frame that claims (accepted, reported) within a closure run's reach of the
+  // place refused as a pattern just before (way_here.h); nothing when it does not.
+  std::optional<WayHereRefusal> continuedRefutation(const std::array<LocationId, 2>& claimed,
+                                                    std::int64_t frame_id,
+                                                    double accepted_log10_nfa) const;
+  // Places a loop closure joins to the accepted place's stretch of its traversal (within
+  // temporal_radius links): earlier visits of it, which no way here counts as another place.
+  std::set<LocationId> earlierVisitsOf(LocationId accepted) const;
   // The WM locations that continue the closure run at this frame (closure_run.h), sorted; empty
   // when temporal consistency is off or the frame continues no run.
   std::vector<LocationId> nearLastClosure(std::int64_t frame_id) const;

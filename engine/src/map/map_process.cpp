@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <set>
 
 #include "features/image_conversion.h"
@@ -246,11 +247,19 @@ std::string MapImpl::rejectionOf(const FilterOutcome& outcome, const Verified& v
         "way here: no two places in a row of the {} on the frame's way back to the place are "
         "unrelated to it (one scene all along, not a revisit)",
         verified.way_here->way);
+  if (verified.way_here && verified.way_here->verdict == WayHereVerdict::kContinued)
+    return fmt::format(
+        "way here: location {} was refused as a pattern that repeats along the route {} "
+        "frame(s) before, and the frame claims it or a neighbour again (the same agreement, not "
+        "the place)",
+        verified.way_here->location, verified.way_here->frames_since);
   if (verified.way_here)
     return fmt::format(
-        "way here: location {} of the frame's way here agrees with NFA 1e{:.1f} (best of {}) "
-        "against the closure's 1e{:.1f} (a pattern that repeats along the route, not the place)",
+        "way here: location {} of the frame's way here agrees with NFA 1e{:.1f} (1e{:.1f} "
+        "counted among {} compared) against the closure's 1e{:.1f} (a pattern that repeats "
+        "along the route, not the place)",
         verified.way_here->location, verified.way_here->result.log10_nfa,
+        verified.way_here->result.log10_nfa + std::log10(verified.way_here->tries),
         verified.way_here->impostors, verified.way_here->accepted_log10_nfa);
   if (verified.passed) return toString(outcome.reason);
   const std::string over =
@@ -288,6 +297,8 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
   times.verification = msSince(verify_start);
   r.hypothesis.candidates_checked = verified.checked;
   counters_.closure_evidence = verified.evidence;
+  if (verified.way_here && verified.way_here->verdict != WayHereVerdict::kNeverLeft)
+    counters_.refuted = {verified.location, frameClock(r.frame_id), r.session_id};
   r.hypothesis.evidence_frames = verified.by_evidence   ? verified.evidence.frames
                                  : verified.checked > 0 ? 1
                                                         : 0;

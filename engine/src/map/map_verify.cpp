@@ -228,8 +228,11 @@ std::optional<WayHereRefusal> MapImpl::judgeWayHere(LocationId accepted, Locatio
   place_side = true;
   const std::size_t begin =
       reaches ? placeSurroundingsBegin(way.size(), end, unrelated) : way.size() - 1;
-  const std::vector<LocationId> between(way.begin() + static_cast<std::ptrdiff_t>(end),
-                                        way.begin() + static_cast<std::ptrdiff_t>(begin) + 1);
+  const bool ranked = options_.geometry_way_here_ranked;
+  const std::set<LocationId> visits = ranked ? earlierVisitsOf(accepted) : std::set<LocationId>{};
+  std::vector<LocationId> between;
+  for (std::size_t i = end; i <= begin; ++i)
+    if (!visits.count(way[i])) between.push_back(way[i]);
   const std::set<LocationId> among(between.begin(), between.end());
   const std::vector<LocationId> impostors = mostSimilar(
       between, index_.similarities(signature, [&among](LocationId id) { return among.count(id); }),
@@ -237,18 +240,53 @@ std::optional<WayHereRefusal> MapImpl::judgeWayHere(LocationId accepted, Locatio
   PairedChecks compared(impostors, threads, prepare, [&](const GeometricView& view) {
     return compareGeometry(query, view, compare);
   });
-  for (LocationId id : impostors) {
-    std::optional<GeometricResult> g = compared(id);
-    if (g && refutes(accepted_log10_nfa, g->log10_nfa, static_cast<int>(impostors.size()),
-                     options_.geometry_max_nfa)) {
+  const int uniform = ranked ? 0 : static_cast<int>(impostors.size());
+  for (std::size_t j = 0; j < impostors.size(); ++j) {
+    std::optional<GeometricResult> g = compared(impostors[j]);
+    const double tries = impostorTries(static_cast<int>(j) + 1, uniform);
+    if (g && refutes(accepted_log10_nfa, g->log10_nfa, tries, options_.geometry_max_nfa, ranked)) {
       refusal.verdict = WayHereVerdict::kRepeated;
-      refusal.location = id;
+      refusal.location = impostors[j];
       refusal.result = std::move(*g);
       refusal.impostors = static_cast<int>(impostors.size());
+      refusal.tries = tries;
       return refusal;
     }
   }
   return std::nullopt;
+}
+
+std::optional<WayHereRefusal> MapImpl::continuedRefutation(const std::array<LocationId, 2>& claimed,
+                                                           std::int64_t frame_id,
+                                                           double accepted_log10_nfa) const {
+  const RefutedPlace& refuted = counters_.refuted;
+  if (!options_.geometry_way_here_ranked ||
+      !withinRefutation(refuted, frame_id, *session_id_, options_.temporal_max_gap))
+    return std::nullopt;
+  const auto inWm = [this](LocationId id) { return tiers_->isIn(id, Tier::kWm); };
+  for (const auto& [id, depth] : graph_.withinLinks(refuted.location, options_.temporal_radius,
+                                                    inWm, LinkWalk::kNeighbourLinksOnly)) {
+    if (id != claimed[0] && id != claimed[1]) continue;
+    WayHereRefusal refusal;
+    refusal.verdict = WayHereVerdict::kContinued;
+    refusal.location = refuted.location;
+    refusal.accepted_log10_nfa = accepted_log10_nfa;
+    refusal.frames_since = frame_id - refuted.frame;
+    return refusal;
+  }
+  return std::nullopt;
+}
+
+std::set<LocationId> MapImpl::earlierVisitsOf(LocationId accepted) const {
+  // The place's stretch of its traversal, as far as a closure run's jitter reaches, and what a
+  // loop closure joins to it there: the map's own word that those places are this one.
+  const auto inWm = [this](LocationId id) { return tiers_->isIn(id, Tier::kWm); };
+  std::set<LocationId> visits;
+  for (const auto& [id, depth] :
+       graph_.withinLinks(accepted, options_.temporal_radius, inWm, LinkWalk::kNeighbourLinksOnly))
+    for (LocationId n : graph_.neighbourSet(id))
+      if (graph_.isLoopClosure(id, n)) visits.insert(n);
+  return visits;
 }
 
 MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const Features& features,
@@ -408,7 +446,9 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   if (v.passed && agreeing && !v.temporal && options_.geometry_way_here_checks > 0 &&
       options_.geometry_rule != GeometryRule::kInliers &&
       !std::binary_search(near.begin(), near.end(), accepted_place)) {
-    v.way_here = judgeWayHere(reported, own_view, query, q.signature, v.evidence.log10_nfa);
+    v.way_here = continuedRefutation({accepted_place, reported}, frame_id, v.evidence.log10_nfa);
+    if (!v.way_here)
+      v.way_here = judgeWayHere(reported, own_view, query, q.signature, v.evidence.log10_nfa);
     if (v.way_here) {
       v.passed = false;
       v.evidence = ClosureEvidence{};  // a pattern's agreement carries no run either
