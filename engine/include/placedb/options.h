@@ -136,6 +136,9 @@ struct Options {
   double temporal_min_overlap = 0.025;  // nfa rule (and either)
   int temporal_radius = 2;              // links from the last closure that passed on its own
   int temporal_max_gap = 4;             // frames since that closure (1 = the previous frame's)
+  // A frame whose agreement with a place of the run is one object, not its scene
+  // (geometry_min_scene_share), ends the run: the camera has left the places it follows.
+  bool temporal_end_on_object = true;
 
   // --- running ---
   // Worker threads of feature extraction, quantisation, the place-code scan and the geometric
@@ -164,7 +167,8 @@ struct Options {
   // A session's settings as a map stored them: a setting added after that session began takes
   // the value that reproduces it (feature_target 0, feature_retry 0.5, geometry_max_error_diagonal
   // 0, geometry_count_candidates false, geometry_min_scene_share 0, geometry_way_here_checks 0,
-  // geometry_way_here_ranked false), so a resumed session decides as it did.
+  // geometry_way_here_ranked false, temporal_end_on_object false), so a resumed session decides
+  // as it did.
   static Options fromStoredSettings(const std::map<std::string, std::string>& settings);
   std::map<std::string, std::string> toSettings() const;
   void validate() const;

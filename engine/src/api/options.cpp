@@ -283,6 +283,10 @@ const std::vector<Row>& table() {
               "frames after that closure for which the relaxed rule still applies, later frames "
               "reaching temporal_radius + gap - 1 links ahead in the direction the closures "
               "move (1 = the next frame only)"),
+      boolean("temporal_end_on_object", &Options::temporal_end_on_object,
+              "a frame whose agreement with a place of the run shares one object, not the scene "
+              "(geometry_min_scene_share), ends the run: later frames no longer pass the relaxed "
+              "rule on it"),
       real("fx", &Options::fx, 0, 1e6, "0..1e6",
            "camera focal length along x in pixels; fx fy cx cy all four or none (0 = unknown): "
            "with them every accepted loop closure also stores its relative pose"),
@@ -356,6 +360,7 @@ Options Options::fromStoredSettings(const std::map<std::string, std::string>& se
   before.geometry_min_scene_share = 0;
   before.geometry_way_here_checks = 0;
   before.geometry_way_here_ranked = false;
+  before.temporal_end_on_object = false;
   return fromSettings(settings, before);
 }
 

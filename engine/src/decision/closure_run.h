@@ -19,6 +19,11 @@
 // last anchor the new run keeps the old one's heading, since the camera still moves the same
 // way and the visits of one street run the same way on these sequences; after a longer break
 // it starts without one.
+//
+// End. A frame whose agreement with a place within the run's reach passes the check but shares
+// only an object of the frame's scene (scene_extent.h) ends the run: the camera has turned off
+// the route the run follows, and the relaxed rule has no revisit left to lean on
+// (temporal_end_on_object; map_process.cpp).
 #include <cstdint>
 #include <optional>
 

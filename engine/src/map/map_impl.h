@@ -127,6 +127,9 @@ class MapImpl final : public Map {
     // Set when the place passed the check but shares too little of the frame's scene
     // (scene_extent.h): an object, not the place. The frame is then refused.
     std::optional<SceneShare> object_only;
+    // Set with object_only when the place lies in the closure run's reach and
+    // temporal_end_on_object is on: the camera has left the places the run follows.
+    bool ends_run = false;
     // Set when the closure is not what the frame's agreement singles out (way_here.h): the
     // camera never left the place's scene, or a place of its way here agrees about as well.
     // The frame is refused.

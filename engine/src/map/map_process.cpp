@@ -297,6 +297,7 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
   times.verification = msSince(verify_start);
   r.hypothesis.candidates_checked = verified.checked;
   counters_.closure_evidence = verified.evidence;
+  if (verified.ends_run) counters_.closure_run = ClosureRun{};
   if (verified.way_here && verified.way_here->verdict != WayHereVerdict::kNeverLeft)
     counters_.refuted = {verified.location, frameClock(r.frame_id), r.session_id};
   r.hypothesis.evidence_frames = verified.by_evidence   ? verified.evidence.frames

@@ -438,6 +438,8 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
       v.passed = false;
       v.object_only = scene;
       v.evidence = ClosureEvidence{};  // an object's agreement carries no run either
+      v.ends_run = options_.temporal_end_on_object &&
+                   std::binary_search(near.begin(), near.end(), accepted_place);
     }
   }
   // A closure that starts a run must be the place its agreement singles out (way_here.h); one
