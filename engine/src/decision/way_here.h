@@ -41,9 +41,11 @@
 // Refutations come in runs too. The next frames see nearly the same view and agree with the
 // refuted place again, a frame further on, while the way's views stay where their locations were
 // stored: the impostor that matched one frame's offset from the pattern can miss the next one's.
-// Their agreement is the refuted one measured again, so a frame that claims a place within a
-// closure run's reach of the refuted one (temporal_radius links, up to temporal_max_gap frames
-// later) is refused with it, and carries the refutation on.
+// So the impostor found for a refused frame stands for the frames that claim a place within a
+// closure run's reach of the refused one (temporal_radius links, up to temporal_max_gap frames
+// later): their evidence must beat its level by the bar's factor, or they are refused with it.
+// Only a refutation measured on a frame's own way anchors them; carried on from frame to frame,
+// one would follow a true revisit along the graph.
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -66,6 +68,7 @@ struct RefutedPlace {
   LocationId location = 0;  // 0 = none
   std::int64_t frame = 0;   // the refusing frame, on the frame clock
   std::int64_t session = 0;
+  double impostor = 0;  // log10 of the impostor's NFA times its tries (impostorTries)
 };
 
 // Whether a frame of `session` at `frame` is near enough in time to continue `refuted`.

@@ -43,6 +43,7 @@ void EngineCounters::save(storage::MapStore& store) const {
     j["refuted_location"] = refuted.location;
     j["refuted_frame"] = refuted.frame;
     j["refuted_session"] = refuted.session;
+    j["refuted_impostor"] = refuted.impostor;
   }
   // Only where a server map's writer set them: a file's counters stay as they were.
   const std::pair<const char*, std::int64_t> fleet[] = {{"frame_block_end", frame_block_end},
@@ -85,6 +86,7 @@ bool EngineCounters::load(const storage::MapStore& store) {
     refuted.location = j.value("refuted_location", std::int64_t{0});
     refuted.frame = j.value("refuted_frame", std::int64_t{0});
     refuted.session = j.value("refuted_session", std::int64_t{0});
+    refuted.impostor = j.value("refuted_impostor", 0.0);
     // Absent from maps made before schema 4, whose ages were the location ids.
     next_wm_age = j.value("next_wm_age", next_location_id);
     // Absent where no block was reserved (every file, and maps before schema 11).

@@ -298,8 +298,12 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
   r.hypothesis.candidates_checked = verified.checked;
   counters_.closure_evidence = verified.evidence;
   if (verified.ends_run) counters_.closure_run = ClosureRun{};
-  if (verified.way_here && verified.way_here->verdict != WayHereVerdict::kNeverLeft)
-    counters_.refuted = {verified.location, frameClock(r.frame_id), r.session_id};
+  // Only a refutation measured on the frame's own way anchors the next frames' (way_here.h):
+  // carried on from frame to frame it would follow a revisit along the graph.
+  if (verified.way_here && verified.way_here->verdict == WayHereVerdict::kRepeated)
+    counters_.refuted = {
+        verified.location, frameClock(r.frame_id), r.session_id,
+        verified.way_here->result.log10_nfa + std::log10(verified.way_here->tries)};
   r.hypothesis.evidence_frames = verified.by_evidence   ? verified.evidence.frames
                                  : verified.checked > 0 ? 1
                                                         : 0;

@@ -263,6 +263,10 @@ std::optional<WayHereRefusal> MapImpl::continuedRefutation(const std::array<Loca
   if (!options_.geometry_way_here_ranked ||
       !withinRefutation(refuted, frame_id, *session_id_, options_.temporal_max_gap))
     return std::nullopt;
+  // The impostor found for that frame stands for this one: its level is the chance level this
+  // frame's evidence must beat by the bar's factor (way_here.h).
+  if (!refutes(accepted_log10_nfa, refuted.impostor, 1, options_.geometry_max_nfa, false))
+    return std::nullopt;
   const auto inWm = [this](LocationId id) { return tiers_->isIn(id, Tier::kWm); };
   for (const auto& [id, depth] : graph_.withinLinks(refuted.location, options_.temporal_radius,
                                                     inWm, LinkWalk::kNeighbourLinksOnly)) {
@@ -278,14 +282,18 @@ std::optional<WayHereRefusal> MapImpl::continuedRefutation(const std::array<Loca
 }
 
 std::set<LocationId> MapImpl::earlierVisitsOf(LocationId accepted) const {
-  // The place's stretch of its traversal, as far as a closure run's jitter reaches, and what a
-  // loop closure joins to it there: the map's own word that those places are this one.
+  // The map's own word that places are this one: a loop closure between the place's stretch of
+  // its traversal and another visit's, each stretch as far as a closure run's jitter reaches
+  // (a visit's closures land on a place or two beside the one the frame names).
   const auto inWm = [this](LocationId id) { return tiers_->isIn(id, Tier::kWm); };
+  const auto stretch = [&](LocationId id) {
+    return graph_.withinLinks(id, options_.temporal_radius, inWm, LinkWalk::kNeighbourLinksOnly);
+  };
   std::set<LocationId> visits;
-  for (const auto& [id, depth] :
-       graph_.withinLinks(accepted, options_.temporal_radius, inWm, LinkWalk::kNeighbourLinksOnly))
+  for (const auto& [id, depth] : stretch(accepted))
     for (LocationId n : graph_.neighbourSet(id))
-      if (graph_.isLoopClosure(id, n)) visits.insert(n);
+      if (graph_.isLoopClosure(id, n) && !visits.count(n))
+        for (const auto& [v, d] : stretch(n)) visits.insert(v);
   return visits;
 }
 
