@@ -266,6 +266,16 @@ TEST(ClosureRunGaps, TheWayHereJudgesTheStartsOfRunsOnly) {
         << "frame " << i << ": " << frames[i].rejected;
 }
 
+// Every frame of a synthetic walk, named as files under `folder` would be.
+Sequence rendered(const synthetic::SyntheticSequence& walk, const std::string& folder) {
+  Sequence seq;
+  for (int i = 0; i < walk.size(); ++i) {
+    seq.images.push_back(walk.render(i));
+    seq.paths.push_back(folder + "/" + std::to_string(i) + ".png");
+  }
+  return seq;
+}
+
 // A walk on the ground world that drives part of its route again (960x540, 0.5 m a frame) with
 // exact ground truth: every closure accepted names a frame within 2 of one whose view overlaps
 // the frame's. Where the second pass turns off the first, at frame 447, the place the run follows
@@ -280,11 +290,7 @@ TEST(ClosureRunEnd, AClosureRunEndsWhereItsPlaceSharesOnlyAnObject) {
   o.pitch_degrees = 30;
   o.camera_height = 1.5;
   const synthetic::SyntheticSequence walk(o);
-  Sequence seq;
-  for (int i = 0; i < walk.size(); ++i) {
-    seq.images.push_back(walk.render(i));
-    seq.paths.push_back("walk/" + std::to_string(i) + ".png");
-  }
+  const Sequence seq = rendered(walk, "walk");
   Truth truth;
   for (const auto& [q, r] : walk.groundTruth()) truth[q].push_back(r);
   const auto frames = mapFrames(seq, "walk", "ClosureRunEnd", Options(), {});
@@ -312,12 +318,7 @@ TEST(WayHereRefutations, CarryOverAStopAndResumeExactly) {
   o.height = 120;
   o.hfov_degrees = 95;
   o.speed = 0.3;
-  const synthetic::SyntheticSequence walk(o);
-  Sequence seq;
-  for (int i = 0; i < walk.size(); ++i) {
-    seq.images.push_back(walk.render(i));
-    seq.paths.push_back("corridor/" + std::to_string(i) + ".png");
-  }
+  const Sequence seq = rendered(synthetic::SyntheticSequence(o), "corridor");
   const auto straight = mapFrames(seq, "corridor", "RefutationsStraight", Options(), {});
   std::set<std::size_t> stops;
   for (std::size_t i = 1; i < straight.size(); ++i)
