@@ -289,11 +289,13 @@ std::set<LocationId> MapImpl::earlierVisitsOf(LocationId accepted) const {
   const auto stretch = [&](LocationId id) {
     return graph_.withinLinks(id, options_.temporal_radius, inWm, LinkWalk::kNeighbourLinksOnly);
   };
-  std::set<LocationId> visits;
+  std::set<LocationId> joined;
   for (const auto& [id, depth] : stretch(accepted))
     for (LocationId n : graph_.neighbourSet(id))
-      if (graph_.isLoopClosure(id, n) && !visits.count(n))
-        for (const auto& [v, d] : stretch(n)) visits.insert(v);
+      if (graph_.isLoopClosure(id, n)) joined.insert(n);
+  std::set<LocationId> visits;
+  for (LocationId n : joined)
+    for (const auto& [v, depth] : stretch(n)) visits.insert(v);
   return visits;
 }
 
