@@ -86,6 +86,12 @@ struct Camera {
   double pitch_degrees;  // the small camera looks further down: its view is taller
 };
 
+// A camera's test name: its image size.
+template <typename CameraParam>
+std::string sizeName(const ::testing::TestParamInfo<CameraParam>& info) {
+  return std::to_string(info.param.width) + "x" + std::to_string(info.param.height);
+}
+
 class LookalikeWalk : public ::testing::TestWithParam<Camera> {};
 
 // A walk that never comes back, 0.5 m a frame, past one A0 poster laid at two places 48 frames
@@ -105,10 +111,7 @@ TEST_P(LookalikeWalk, OnePosterAtTwoPlacesIsNotAPlace) {
 
 INSTANTIATE_TEST_SUITE_P(SmallAndLargeCamera, LookalikeWalk,
                          ::testing::Values(Camera{160, 120, 40}, Camera{960, 540, 30}),
-                         [](const auto& info) {
-                           return std::to_string(info.param.width) + "x" +
-                                  std::to_string(info.param.height);
-                         });
+                         sizeName<Camera>);
 
 // A single pass down a corridor, 0.3 m a frame, where a door and a bank of lockers repeat on both
 // walls every 6 m (synthetic/lookalikes.h): every view agrees with every other one far beyond
@@ -137,9 +140,7 @@ INSTANTIATE_TEST_SUITE_P(
     SmallAndLargeCamera, CorridorWalk,
     ::testing::Values(CorridorCamera{160, 120, 95},
                       CorridorCamera{960, 540, synthetic::sceneDefaults("corridor").hfov_degrees}),
-    [](const auto& info) {
-      return std::to_string(info.param.width) + "x" + std::to_string(info.param.height);
-    });
+    sizeName<CorridorCamera>);
 
 }  // namespace
 }  // namespace placedb::testing

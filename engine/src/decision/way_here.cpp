@@ -58,10 +58,14 @@ double impostorTries(int rank, int uniform) {
   return j * (j + 1);
 }
 
+double countedLog10Nfa(double log10_nfa, double tries) {
+  return log10_nfa + std::log10(std::max(1.0, tries));
+}
+
 bool refutes(double accepted_log10_nfa, double impostor_log10_nfa, double tries, double max_nfa,
              bool passing_refutes) {
   const double bar = std::log10(max_nfa);
-  const double impostor = impostor_log10_nfa + std::log10(std::max(1.0, tries));
+  const double impostor = countedLog10Nfa(impostor_log10_nfa, tries);
   if (passing_refutes && impostor <= bar) return true;
   return accepted_log10_nfa - std::min(0.0, impostor) > bar;
 }

@@ -63,12 +63,12 @@ enum class WayHereVerdict {
   kContinued,  // the frame claims a place next to one refuted as a pattern just before
 };
 
-// The newest place refused as a pattern (kRepeated or kContinued) and when.
+// The newest place refused as a pattern on its frame's own way (kRepeated) and when.
 struct RefutedPlace {
   LocationId location = 0;  // 0 = none
   std::int64_t frame = 0;   // the refusing frame, on the frame clock
   std::int64_t session = 0;
-  double impostor = 0;  // log10 of the impostor's NFA times its tries (impostorTries)
+  double impostor = 0;  // the impostor's countedLog10Nfa
 };
 
 // Whether a frame of `session` at `frame` is near enough in time to continue `refuted`.
@@ -81,7 +81,7 @@ struct WayHereRefusal {
                                   // kContinued: the place refuted before
   GeometricResult result;         // kRepeated: its comparison
   int impostors = 0;              // kRepeated: places of the way here compared
-  double tries = 0;               // kRepeated: the false alarms it stands for (impostorTries)
+  double counted_log10_nfa = 0;   // kRepeated: its NFA times its tries (countedLog10Nfa)
   double accepted_log10_nfa = 0;  // the evidence the acceptance rested on
   int way = 0;                    // places on the way here
   std::int64_t frames_since = 0;  // kContinued: frames since that place was refused
@@ -108,6 +108,9 @@ std::vector<LocationId> mostSimilar(const std::vector<LocationId>& places,
 // place compared (1 = the most similar): rank (rank + 1). `uniform` > 0: every one alike, as
 // many as were compared (sessions begun before the ranked weights, Options).
 double impostorTries(int rank, int uniform);
+
+// log10 of an impostor's NFA (given as log10) times the `tries` it stands for (impostorTries).
+double countedLog10Nfa(double log10_nfa, double tries);
 
 // Whether an impostor at `impostor_log10_nfa`, counted as `tries` false alarms (impostorTries),
 // refutes an acceptance whose evidence is `accepted_log10_nfa` (see above). `passing_refutes`:

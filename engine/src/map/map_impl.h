@@ -131,8 +131,8 @@ class MapImpl final : public Map {
     // temporal_end_on_object is on: the camera has left the places the run follows.
     bool ends_run = false;
     // Set when the closure is not what the frame's agreement singles out (way_here.h): the
-    // camera never left the place's scene, or a place of its way here agrees about as well.
-    // The frame is refused.
+    // camera never left the place's scene, a place of its way here agrees about as well, or the
+    // frame claims again a place refused so just before. The frame is refused.
     std::optional<WayHereRefusal> way_here;
   };
   // Links the frame's location to the accepted closure; one that passed on its own anchors the
@@ -188,6 +188,8 @@ class MapImpl final : public Map {
   static CachedKeypoints keypointPositions(const std::vector<storage::WordRef>& refs);
   void loadKeypointCodes(std::int64_t location_id, CachedKeypoints& entry) const;
   GeometricView viewOf(const CachedKeypoints& keypoints) const;
+  // A location's stored view for the geometric check; nothing when it has no keypoints.
+  std::optional<GeometricView> placeView(LocationId location);
   void retrieveNeighbours(std::int64_t hypothesis, FrameWrite& write, FrameResult& result);
   // Moves LTM locations back to WM: signatures, missing words, links, ages.
   void bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write, FrameResult& result);

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <set>
 
 #include "features/image_conversion.h"
@@ -259,8 +258,8 @@ std::string MapImpl::rejectionOf(const FilterOutcome& outcome, const Verified& v
         "counted among {} compared) against the closure's 1e{:.1f} (a pattern that repeats "
         "along the route, not the place)",
         verified.way_here->location, verified.way_here->result.log10_nfa,
-        verified.way_here->result.log10_nfa + std::log10(verified.way_here->tries),
-        verified.way_here->impostors, verified.way_here->accepted_log10_nfa);
+        verified.way_here->counted_log10_nfa, verified.way_here->impostors,
+        verified.way_here->accepted_log10_nfa);
   if (verified.passed) return toString(outcome.reason);
   const std::string over =
       verified.places > 1 ? fmt::format(" over {} places", verified.places) : std::string();
@@ -301,9 +300,8 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
   // Only a refutation measured on the frame's own way anchors the next frames' (way_here.h):
   // carried on from frame to frame it would follow a revisit along the graph.
   if (verified.way_here && verified.way_here->verdict == WayHereVerdict::kRepeated)
-    counters_.refuted = {
-        verified.location, frameClock(r.frame_id), r.session_id,
-        verified.way_here->result.log10_nfa + std::log10(verified.way_here->tries)};
+    counters_.refuted = {verified.location, frameClock(r.frame_id), r.session_id,
+                         verified.way_here->counted_log10_nfa};
   r.hypothesis.evidence_frames = verified.by_evidence   ? verified.evidence.frames
                                  : verified.checked > 0 ? 1
                                                         : 0;

@@ -61,6 +61,12 @@ void MapImpl::loadKeypointCodes(std::int64_t location_id, CachedKeypoints& entry
         std::make_shared<const DescriptorCodes>(storedDescriptorCodes(*bytes, vocabulary_->dim()));
 }
 
+std::optional<GeometricView> MapImpl::placeView(LocationId location) {
+  const CachedKeypoints& keypoints = keypointsOf(location);
+  if (keypoints.points.empty()) return std::nullopt;
+  return viewOf(keypoints);
+}
+
 GeometricView MapImpl::viewOf(const CachedKeypoints& keypoints) const {
   GeometricView view;
   view.points = keypoints.points;
@@ -150,9 +156,9 @@ std::optional<AgreeingPlace> MapImpl::agreeingPlace(LocationId accepted,
     neighbours.push_back(id);
   return mostAgreeingPlace(accepted, neighbours,
                            [&](LocationId c, int at_least) -> std::optional<GeometricResult> {
-                             const CachedKeypoints& keypoints = keypointsOf(c);
-                             if (keypoints.points.empty()) return std::nullopt;
-                             return compareGeometry(query, viewOf(keypoints), compare, at_least);
+                             const std::optional<GeometricView> view = placeView(c);
+                             if (!view) return std::nullopt;
+                             return compareGeometry(query, *view, compare, at_least);
                            });
 }
 
@@ -163,9 +169,9 @@ SceneShare MapImpl::sceneOf(const GeometricResult& place, LocationId own_view,
   // scene to measure it (a blurred or featureless frame).
   std::optional<GeometricResult> own;
   for (int back = 0; back < 2 && own_view; ++back, own_view = traversalPredecessor(own_view)) {
-    const CachedKeypoints& keypoints = keypointsOf(own_view);
-    if (keypoints.points.empty()) continue;
-    own = compareGeometry(query, viewOf(keypoints), compare);
+    const std::optional<GeometricView> view = placeView(own_view);
+    if (!view) continue;
+    own = compareGeometry(query, *view, compare);
     if (static_cast<int>(own->agreeing_query.size()) >= kMinPlanePairs) break;
   }
   return sceneShare(place, own ? &*own : nullptr, agreementDistance(compare, query.image_size));
@@ -198,11 +204,7 @@ std::optional<WayHereRefusal> MapImpl::judgeWayHere(LocationId accepted, Locatio
   // Both walks check ahead on another core (paired_checks.h): the frame's from its end of the
   // way, the place's from the other.
   const int threads = resolveThreadCount(options_.threads);
-  const auto prepare = [this](LocationId id) -> std::optional<GeometricView> {
-    const CachedKeypoints& keypoints = keypointsOf(id);
-    if (keypoints.points.empty()) return std::nullopt;
-    return viewOf(keypoints);
-  };
+  const auto prepare = [this](LocationId id) { return placeView(id); };
   const auto agreement = [&](const GeometricView& view) {
     return checkGeometry(query, view, beyond_chance);
   };
@@ -249,7 +251,7 @@ std::optional<WayHereRefusal> MapImpl::judgeWayHere(LocationId accepted, Locatio
       refusal.location = impostors[j];
       refusal.result = std::move(*g);
       refusal.impostors = static_cast<int>(impostors.size());
-      refusal.tries = tries;
+      refusal.counted_log10_nfa = countedLog10Nfa(refusal.result.log10_nfa, tries);
       return refusal;
     }
   }
@@ -381,11 +383,7 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   std::map<LocationId, GeometricResult> checked_continuing;
   PairedChecks checks(
       candidates, resolveThreadCount(options_.threads),
-      [this](LocationId c) -> std::optional<GeometricView> {
-        const CachedKeypoints& keypoints = keypointsOf(c);
-        if (keypoints.points.empty()) return std::nullopt;
-        return viewOf(keypoints);
-      },
+      [this](LocationId c) { return placeView(c); },
       [&](const GeometricView& view) { return checkGeometry(query, view, geometry); });
   const CandidateChoice choice = chooseCandidate(
       candidates, near, geometry.rule,
@@ -433,6 +431,7 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   // The place an accepted closure names: the accepted one or a traversal neighbour that agrees
   // with the frame on more pairs (agreeing_place.h). Its evidence stays the decision's.
   const LocationId accepted_place = reported;
+  const bool in_run = std::binary_search(near.begin(), near.end(), accepted_place);
   std::optional<AgreeingPlace> agreeing;
   if (outcome.accepted && v.passed) agreeing = agreeingPlace(reported, query);
   if (agreeing && agreeing->location != reported) {
@@ -448,16 +447,14 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
       v.passed = false;
       v.object_only = scene;
       v.evidence = ClosureEvidence{};  // an object's agreement carries no run either
-      v.ends_run = options_.temporal_end_on_object &&
-                   std::binary_search(near.begin(), near.end(), accepted_place);
+      v.ends_run = options_.temporal_end_on_object && in_run;
     }
   }
   // A closure that starts a run must be the place its agreement singles out (way_here.h); one
   // that continues the run (accepted within its reach, on the relaxed rule or not) leans on that
   // start, wherever the agreeing neighbour then names it.
   if (v.passed && agreeing && !v.temporal && options_.geometry_way_here_checks > 0 &&
-      options_.geometry_rule != GeometryRule::kInliers &&
-      !std::binary_search(near.begin(), near.end(), accepted_place)) {
+      options_.geometry_rule != GeometryRule::kInliers && !in_run) {
     v.way_here = continuedRefutation({accepted_place, reported}, frame_id, v.evidence.log10_nfa);
     if (!v.way_here)
       v.way_here = judgeWayHere(reported, own_view, query, q.signature, v.evidence.log10_nfa);
