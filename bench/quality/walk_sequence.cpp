@@ -71,29 +71,6 @@ int usage(std::FILE* to, int code) {
   return code;
 }
 
-// Each maximal run of consecutive r (one pass over q's place) gives its best-overlapping frame.
-std::vector<int> nearestPerPass(const SyntheticSequence& s, int q, const std::vector<int>& rs) {
-  std::vector<int> out;
-  std::size_t i = 0;
-  while (i < rs.size()) {
-    std::size_t j = i;
-    while (j + 1 < rs.size() && rs[j + 1] <= rs[j] + 2) ++j;
-    int best = rs[i];
-    double best_iou = -1;
-    for (std::size_t k = i; k <= j; ++k) {
-      const auto rel =
-          placedb::synthetic::relateViews(q, s.pose(q), rs[k], s.pose(rs[k]), s.camera());
-      if (rel.iou > best_iou) {
-        best_iou = rel.iou;
-        best = rs[k];
-      }
-    }
-    out.push_back(best);
-    i = j + 1;
-  }
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -168,8 +145,7 @@ int main(int argc, char** argv) {
     for (int q = 0; q < sequence.size(); ++q) {
       const auto p = sequence.pose(q);
       poses << fmt::format("{} {:.4f} {:.4f} {:.5f}\n", q, p.x, p.y, p.heading);
-      const std::vector<int> rs = sequence.revisitsOf(q);
-      for (int r : nearestPerPass(sequence, q, rs)) nearest << q << ' ' << r << '\n';
+      for (int r : sequence.nearestViewsOf(q)) nearest << q << ' ' << r << '\n';
     }
     if (!nearest || !poses) throw placedb::Error(placedb::ErrorCode::kIo, "cannot write " + out);
     std::printf("%d frames, %d revisiting, in %s\n", sequence.size(), sequence.revisitingFrames(),

@@ -322,6 +322,28 @@ std::vector<int> SyntheticSequence::revisitsOf(int q) const {
   return refs;
 }
 
+std::vector<int> SyntheticSequence::nearestViewsOf(int q) const {
+  const std::vector<int> rs = revisitsOf(q);
+  std::vector<int> out;
+  std::size_t i = 0;
+  while (i < rs.size()) {
+    std::size_t j = i;
+    while (j + 1 < rs.size() && rs[j + 1] <= rs[j] + 2) ++j;
+    int best = rs[i];
+    double best_iou = -1;
+    for (std::size_t k = i; k <= j; ++k) {
+      const double iou = relateViews(q, pose(q), rs[k], pose(rs[k]), camera_).iou;
+      if (iou > best_iou) {
+        best_iou = iou;
+        best = rs[k];
+      }
+    }
+    out.push_back(best);
+    i = j + 1;
+  }
+  return out;
+}
+
 int SyntheticSequence::revisitingFrames() const {
   int count = 0;
   for (int q = 0; q < size(); ++q) count += first_pair_[q + 1] > first_pair_[q] ? 1 : 0;

@@ -126,6 +126,10 @@ class SyntheticSequence {
   const std::vector<std::pair<int, int>>& groundTruth() const { return pairs_; }
   // Every r that frame q revisits, ascending.
   std::vector<int> revisitsOf(int q) const;
+  // Of each earlier pass over q's place (a run of revisited frames, each within 2 of the last),
+  // the frame whose view overlaps q's most (footprint IoU): the right frame for a closure to
+  // name. Ascending.
+  std::vector<int> nearestViewsOf(int q) const;
   int revisitingFrames() const;  // frames with at least one r
   int firstRevisit() const;      // smallest such q, or -1
 
