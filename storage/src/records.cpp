@@ -86,6 +86,10 @@ std::string locationKeypointsKey(std::int64_t location_id) {
   return kLocationKeypointsKeyPrefix + std::to_string(location_id);
 }
 
+std::string locationLatestViewKey(std::int64_t location_id) {
+  return kLocationLatestViewKeyPrefix + std::to_string(location_id);
+}
+
 std::optional<std::int64_t> locationOfKeypointsKey(const std::string& key) {
   const std::string prefix = kLocationKeypointsKeyPrefix;
   if (key.size() <= prefix.size() || key.compare(0, prefix.size(), prefix) != 0)

@@ -186,7 +186,7 @@ Damage damageOnce(const fs::path& map, std::mt19937_64& rng) {
               .second == "text";
       edit.write("UPDATE engine_state SET value = ?2 WHERE key = ?1", key, damaged, text);
       return {"engine_state", (cut ? "cut of '" : "bit of '") + key + "'",
-              key.rfind("keypoint_descriptors/", 0) != 0};
+              key.rfind("keypoint_descriptors/", 0) != 0 && key.rfind("latest_view/", 0) != 0};
     }
     case 4: {  // a kd-forest node's split value or child
       auto nodes = edit.rows("SELECT tree || ',' || node, split_value FROM kd_nodes");

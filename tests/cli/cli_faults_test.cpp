@@ -197,8 +197,9 @@ TEST(CliFaults, SchemaVersionBelowTheTablesIsOneLineRefusal) {
   auto seq = smallSequence(6);
   auto dir = scratchDir("CliFaults_user_version");
   auto map = mappedCopy(seq, dir, "m.placedb", {"--stop-after", "3"});
-  // The schema before the last one that changed a file's tables: schema 16 changed the server's
-  // alone (migrations/0016), so a file marked 15 is one to upgrade, not one below its tables.
+  // The schema before the last one that changed a file's tables: schemas 16 and 17 changed the
+  // server's alone (migrations/0016, 0017), so a file marked 15 or 16 is one to upgrade, not one
+  // below its tables.
   constexpr int kBelow = 14;
   sqlExec(map, "PRAGMA user_version = " + std::to_string(kBelow));
   const std::string before = bytesOf(map);

@@ -388,6 +388,8 @@ TEST_F(PgCli, RobotsCannotTouchOtherRobotsPlacesNorLockTheFleetOut) {
       "FROM word_refs WHERE location_id = " +
           a_place + " LIMIT 1",
       "UPDATE engine_state SET value = value WHERE key = 'keypoint_descriptors/' || " + a_place,
+      "INSERT INTO engine_state (key, value, checksum) VALUES ('latest_view/' || " + a_place +
+          ", '\\x00', 0) ON CONFLICT (key) DO UPDATE SET value = excluded.value",
       "UPDATE engine_state SET value = value WHERE key = 'engine.counters'",
       "DELETE FROM engine_state",
       "DELETE FROM filter_posterior",

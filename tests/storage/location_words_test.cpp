@@ -104,6 +104,21 @@ TEST_P(LocationWords, RetrievalReadsRowsThenTheWordsTable) {
   EXPECT_EQ(code({1}, {7, 3}, kDim), static_cast<int>(ErrorCode::kInvalidArgument));
 }
 
+// The engine_state rows a location owns (its keypoints' descriptors, the view of its latest
+// merged frame) go with it; another location's stay.
+TEST_P(LocationWords, DeletingALocationDeletesItsEngineStateRows) {
+  const std::vector<std::uint8_t> bytes = {1, 2, 3};
+  for (std::int64_t id : {1, 2}) {
+    store_->putState(locationKeypointsKey(id), bytes);
+    store_->putState(locationLatestViewKey(id), bytes);
+  }
+  store_->deleteLocation(2);
+  EXPECT_FALSE(store_->getState(locationKeypointsKey(2)));
+  EXPECT_FALSE(store_->getState(locationLatestViewKey(2)));
+  EXPECT_EQ(store_->getState(locationKeypointsKey(1)), bytes);
+  EXPECT_EQ(store_->getState(locationLatestViewKey(1)), bytes);
+}
+
 #ifdef PLACEDB_RECORDS_ON_PG
 INSTANTIATE_TEST_SUITE_P(Postgresql, LocationWords, ::testing::Values(std::string("postgresql")));
 #else

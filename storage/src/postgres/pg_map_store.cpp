@@ -516,7 +516,7 @@ void PgMapStore::deleteLocation(std::int64_t location_id) {
   auto scope = writeScope();
   db_->send(
       "WITH p AS (DELETE FROM filter_posterior WHERE location_id = $1), "
-      "k AS (DELETE FROM engine_state WHERE key = $2), "
+      "k AS (DELETE FROM engine_state WHERE key IN ($2, $3)), "
       // No key cascades a location's references since schema 16 (migrations/pg/0016).
       "r AS (DELETE FROM word_refs WHERE location_id = $1), "
       "n AS (UPDATE locations o SET link_count = o.link_count - (SELECT count(*) FROM links k "
@@ -524,7 +524,10 @@ void PgMapStore::deleteLocation(std::int64_t location_id) {
       "k.location_a = o.id)) WHERE o.id IN (SELECT location_b FROM links WHERE location_a = $1 "
       "UNION SELECT location_a FROM links WHERE location_b = $1)) "
       "DELETE FROM locations WHERE id = $1",
-      detail::PgParams().add(location_id).add(locationKeypointsKey(location_id)));
+      detail::PgParams()
+          .add(location_id)
+          .add(locationKeypointsKey(location_id))
+          .add(locationLatestViewKey(location_id)));
   scope.commit();
 }
 

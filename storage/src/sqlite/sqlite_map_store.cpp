@@ -458,8 +458,9 @@ void SqliteMapStore::deleteLocation(std::int64_t location_id) {
     s->run();
   }
   {
-    auto s = db_->cached("DELETE FROM engine_state WHERE key = ?1");
+    auto s = db_->cached("DELETE FROM engine_state WHERE key IN (?1, ?2)");
     s->bind(1, locationKeypointsKey(location_id));
+    s->bind(2, locationLatestViewKey(location_id));
     s->run();
   }
   {

@@ -215,7 +215,8 @@ class MapStore {
   virtual void insertLocation(const LocationRecord& location) = 0;
   virtual void updateWeight(std::int64_t location_id, std::int64_t weight) = 0;
   virtual void setTier(const std::vector<std::int64_t>& location_ids, Tier tier) = 0;
-  // Removes the location with its references, coverage and links (frames keep NULL).
+  // Removes the location with its references, coverage, links and engine_state rows (its
+  // keypoint descriptors and latest view; frames keep NULL).
   virtual void deleteLocation(std::int64_t location_id) = 0;
   virtual void addCoveredFrame(std::int64_t location_id, std::int64_t frame_id) = 0;
   virtual std::vector<std::int64_t> coveredFrames(std::int64_t location_id) const = 0;

@@ -109,6 +109,11 @@ inline constexpr const char* kLocationKeypointsKeyPrefix = "keypoint_descriptors
 std::string locationKeypointsKey(std::int64_t location_id);
 // The location a key of that form names; none for any other key.
 std::optional<std::int64_t> locationOfKeypointsKey(const std::string& key);
+// The engine_state key of the view of the latest frame merged into a location,
+// "latest_view/<id>" (engine/src/geometry/latest_view.h): the engine writes it at each merge,
+// and it goes when the location does.
+inline constexpr const char* kLocationLatestViewKeyPrefix = "latest_view/";
+std::string locationLatestViewKey(std::int64_t location_id);
 
 struct WordRef {  // one keypoint of a location's signature quantised to a word
   std::int64_t word_id = 0;
