@@ -200,13 +200,16 @@ TEST(Options, StoredSettingsWithoutALaterSettingKeepWhatTheSessionRan) {
   stored.erase("geometry_way_here_checks");
   EXPECT_EQ(Options::fromStoredSettings(stored).geometry_way_here_checks, 0);
   EXPECT_EQ(Options::fromSettings(stored).geometry_way_here_checks, 8);
-  // ... and one stored while its places were all counted alike and a closure run outlived a
-  // frame that showed its place to be an object.
+  // ... and one stored while its places were all counted alike, a closure run outlived a frame
+  // that showed its place to be an object, and a location was seen from its first frame only.
   stored = Options().toSettings();
   stored["geometry_way_here_checks"] = "4";
   stored.erase("geometry_way_here_ranked");
   stored.erase("temporal_end_on_object");
+  stored.erase("geometry_latest_view");
   EXPECT_EQ(Options::fromStoredSettings(stored).geometry_way_here_checks, 4);
+  EXPECT_FALSE(Options::fromStoredSettings(stored).geometry_latest_view);
+  EXPECT_TRUE(Options::fromSettings(stored).geometry_latest_view);
   EXPECT_FALSE(Options::fromStoredSettings(stored).geometry_way_here_ranked);
   EXPECT_FALSE(Options::fromStoredSettings(stored).temporal_end_on_object);
   EXPECT_TRUE(Options::fromSettings(stored).geometry_way_here_ranked);

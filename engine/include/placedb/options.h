@@ -123,6 +123,10 @@ struct Options {
   // impostor that passes the bar refuting alone, and a refutation carrying over to the next
   // frames that claim the place (way_here.h); false: as sessions begun before it judged.
   bool geometry_way_here_ranked = true;
+  // A location keeps the view of the latest frame merged into it beside its first frame's, and
+  // an accepted closure names the place whose views agree best with the frame
+  // (engine/src/geometry/latest_view.h); false: its first frame's view only.
+  bool geometry_latest_view = true;
 
   // --- temporal consistency (iBoW-LCD's islands; RTAB-Map's closures that follow the graph) ---
   // A hypothesis that misses the check's rule still passes a relaxed one (temporal_min_inliers,
@@ -167,8 +171,8 @@ struct Options {
   // A session's settings as a map stored them: a setting added after that session began takes
   // the value that reproduces it (feature_target 0, feature_retry 0.5, geometry_max_error_diagonal
   // 0, geometry_count_candidates false, geometry_min_scene_share 0, geometry_way_here_checks 0,
-  // geometry_way_here_ranked false, temporal_end_on_object false), so a resumed session decides
-  // as it did.
+  // geometry_way_here_ranked false, geometry_latest_view false, temporal_end_on_object false), so
+  // a resumed session decides as it did.
   static Options fromStoredSettings(const std::map<std::string, std::string>& settings);
   std::map<std::string, std::string> toSettings() const;
   void validate() const;

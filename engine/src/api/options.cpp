@@ -267,6 +267,12 @@ const std::vector<Row>& table() {
               "joined to it by a loop closure none of them, one that passes the bar itself "
               "refuting alone, and a refutation holding for the next frames that claim the "
               "place again; false: as sessions begun before it"),
+      boolean("geometry_latest_view", &Options::geometry_latest_view,
+              "a location keeps the keypoints of the latest frame merged into it beside its "
+              "first frame's, and an accepted loop closure names, of the place and its "
+              "traversal neighbours, the one whose views agree best with the frame (a location "
+              "of several frames is otherwise seen from its first only); false: as sessions "
+              "begun before it"),
       integer("temporal_min_inliers", &Options::temporal_min_inliers, 0, 10000, "0..10000",
               "inliers rule: inliers that suffice for a hypothesis near the last accepted loop "
               "closure (see temporal_radius, temporal_max_gap); 0 = off"),
@@ -360,6 +366,7 @@ Options Options::fromStoredSettings(const std::map<std::string, std::string>& se
   before.geometry_min_scene_share = 0;
   before.geometry_way_here_checks = 0;
   before.geometry_way_here_ranked = false;
+  before.geometry_latest_view = false;
   before.temporal_end_on_object = false;
   return fromSettings(settings, before);
 }

@@ -87,6 +87,9 @@ struct GeometricResult {
   // with the identity when `still`: what a relative pose is measured from (relative_pose.h).
   std::vector<cv::Point2f> agreeing_query, agreeing_candidate;
   bool still = false;  // passed as pairs that did not move (a camera standing still)
+  // Compared with the view of the latest frame merged into the location (latest_view.h), not
+  // its first frame's: a pose measured on these pairs is in that frame's camera.
+  bool latest_view = false;
 };
 
 // Code levels (descriptor_match.h) of a frame's own descriptors, rounded once per frame, and of

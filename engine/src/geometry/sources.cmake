@@ -5,6 +5,7 @@ set(_placedb_geometry_sources
   ${CMAKE_CURRENT_LIST_DIR}/epipolar_fit.cpp
   ${CMAKE_CURRENT_LIST_DIR}/geometric_check.cpp
   ${CMAKE_CURRENT_LIST_DIR}/keypoint_cache.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/latest_view.cpp
   ${CMAKE_CURRENT_LIST_DIR}/relative_pose.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scene_extent.cpp)
 target_sources(placedb_engine PRIVATE ${_placedb_geometry_sources})

@@ -87,6 +87,12 @@ class MapImpl final : public Map {
   // Merges the frame into the newest location or makes a new one (with its place code).
   void placeInShortTermMemory(const Features& features, const Quantised& q, FrameResult& result,
                               FrameWrite& write);
+  // The frame's quantised keypoints as references (into `refs`) and their own descriptors.
+  static cv::Mat quantisedKeypoints(const Features& features, const Quantised& q,
+                                    std::vector<storage::WordRef>& refs);
+  // A merged frame's view as its location keeps it (latest_view.h).
+  static std::vector<std::uint8_t> latestViewOf(const Features& features, const Quantised& q,
+                                                std::int64_t frame_id);
   // Brings back the LTM locations whose place codes rank among the ltm_search most like the frame.
   void searchLongTermMemory(const Features& features, FrameWrite& write, FrameResult& result);
   // Verifies the filter's outcome and records the decision; returns the reported hypothesis.
@@ -121,9 +127,13 @@ class MapImpl final : public Map {
     int checked = 0;             // candidates the check ran on
     double log10_nfa = 0;        // the reported candidate's false alarms over `places`, log10
     GeometricResult geometry;    // the reported candidate's check (its agreeing pairs)
-    ClosureEvidence evidence;    // the check's evidence over the frames up to this one
-    bool by_evidence = false;    // passed as a run of frames, not as this frame alone
-    int places = 1;              // candidates the false alarms were counted over
+    // When `geometry` compared the reported place's latest view: its first frame's comparison,
+    // in whose camera the closure's pose is measured. Only for an accepted closure and
+    // intrinsics known.
+    std::optional<GeometricResult> pose_geometry;
+    ClosureEvidence evidence;  // the check's evidence over the frames up to this one
+    bool by_evidence = false;  // passed as a run of frames, not as this frame alone
+    int places = 1;            // candidates the false alarms were counted over
     // Set when the place passed the check but shares too little of the frame's scene
     // (scene_extent.h): an object, not the place. The frame is then refused.
     std::optional<SceneShare> object_only;
@@ -190,6 +200,13 @@ class MapImpl final : public Map {
   GeometricView viewOf(const CachedKeypoints& keypoints) const;
   // A location's stored view for the geometric check; nothing when it has no keypoints.
   std::optional<GeometricView> placeView(LocationId location);
+  // The view of the latest frame merged into a location (latest_view.h); nothing when it has
+  // none or geometry_latest_view is off.
+  std::optional<GeometricView> latestView(LocationId location) const;
+  // Of a place's views, the comparison `query` agrees with on the most pairs (the first
+  // frame's on a tie); nothing when it has no keypoints. `at_least` as ComparisonCheck's.
+  std::optional<GeometricResult> bestViewComparison(LocationId location, const GeometricView& query,
+                                                    int at_least);
   void retrieveNeighbours(std::int64_t hypothesis, FrameWrite& write, FrameResult& result);
   // Moves LTM locations back to WM: signatures, missing words, links, ages.
   void bringBack(const std::vector<std::int64_t>& ids, FrameWrite& write, FrameResult& result);

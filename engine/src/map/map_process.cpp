@@ -32,6 +32,7 @@ struct MapImpl::FrameWrite {
   std::optional<storage::LocationRecord> new_location;
   std::vector<storage::WordRef> refs;              // the new location's signature
   std::vector<std::uint8_t> keypoint_descriptors;  // the same keypoints' own descriptors
+  std::vector<std::uint8_t> latest_view;  // a merged frame's, for its location (latest_view.h)
   std::vector<storage::WordRecord> words;
   std::vector<storage::LinkRecord> links;
   std::optional<std::pair<std::int64_t, std::int64_t>> weight;  // location, new weight
@@ -201,6 +202,9 @@ void MapImpl::placeInShortTermMemory(const Features& features, const Quantised& 
     w.weight = {previous, tiers_->weightOf(previous)};
     // The merged frame's own new words are referenced by no location: they leave the index.
     vocabulary_->erase(q.created_words);
+    if (options_.geometry_latest_view && geometricCheckOn(options_) &&
+        features.descriptors.type() == CV_32F)
+      w.latest_view = latestViewOf(features, q, r.frame_id);
   } else {
     r.outcome = FrameOutcome::kNewLocation;
     r.location_id = counters_.next_location_id++;
@@ -212,14 +216,7 @@ void MapImpl::placeInShortTermMemory(const Features& features, const Quantised& 
     }
     w.new_location =
         storage::LocationRecord{r.location_id, *session_id_, 0, storage::Tier::kStm, r.frame_id};
-    w.refs.reserve(features.size());
-    cv::Mat kept;
-    for (std::size_t i = 0; i < features.size(); ++i) {
-      if (q.word_of_feature[i] < 0) continue;
-      const Keypoint& k = features.keypoints[i];
-      w.refs.push_back({q.word_of_feature[i], k.x, k.y, k.size, k.angle, k.response});
-      kept.push_back(features.descriptors.row(static_cast<int>(i)));
-    }
+    const cv::Mat kept = quantisedKeypoints(features, q, w.refs);
     if (geometricCheckOn(options_) && features.descriptors.type() == CV_32F)
       w.keypoint_descriptors = encodeDescriptors(kept);
     storeLocationWords(r.location_id, q.signature, w);
@@ -233,6 +230,36 @@ void MapImpl::placeInShortTermMemory(const Features& features, const Quantised& 
   w.frame.outcome = r.outcome == FrameOutcome::kMerged ? storage::FrameOutcome::kMerged
                                                        : storage::FrameOutcome::kNewLocation;
   w.frame.location_id = r.location_id;
+}
+
+cv::Mat MapImpl::quantisedKeypoints(const Features& features, const Quantised& q,
+                                    std::vector<storage::WordRef>& refs) {
+  refs.reserve(features.size());
+  cv::Mat kept;
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    if (q.word_of_feature[i] < 0) continue;
+    const Keypoint& k = features.keypoints[i];
+    refs.push_back({q.word_of_feature[i], k.x, k.y, k.size, k.angle, k.response});
+    kept.push_back(features.descriptors.row(static_cast<int>(i)));
+  }
+  return kept;
+}
+
+std::vector<std::uint8_t> MapImpl::latestViewOf(const Features& features, const Quantised& q,
+                                                std::int64_t frame_id) {
+  std::vector<storage::WordRef> refs;
+  const cv::Mat kept = quantisedKeypoints(features, q, refs);
+  std::vector<std::int64_t> discarded = q.created_words;
+  std::sort(discarded.begin(), discarded.end());
+  std::vector<cv::Point2f> points;
+  std::vector<std::int64_t> words;
+  for (const auto& ref : refs) {
+    points.emplace_back(ref.x, ref.y);
+    // A word the merge erased matches no other view's; its keypoint still matches by descriptor.
+    const bool gone = std::binary_search(discarded.begin(), discarded.end(), ref.word_id);
+    words.push_back(gone ? -1 : ref.word_id);
+  }
+  return encodeLatestView(frame_id, points, words, encodeDescriptors(kept));
 }
 
 std::string MapImpl::rejectionOf(const FilterOutcome& outcome, const Verified& verified) {
@@ -292,7 +319,8 @@ std::int64_t MapImpl::decideLoopClosure(const FilterOutcome& outcome, const Feat
   std::optional<storage::ClosurePose> pose;
   if (options_.hasIntrinsics() && verified.location != kNewPlace && outcome.accepted &&
       verified.passed)
-    pose = closurePose(verified.location, verified.geometry);
+    pose = closurePose(verified.location,
+                       verified.pose_geometry ? *verified.pose_geometry : verified.geometry);
   times.verification = msSince(verify_start);
   r.hypothesis.candidates_checked = verified.checked;
   counters_.closure_evidence = verified.evidence;
@@ -589,6 +617,8 @@ void MapImpl::commit(FrameWrite& w, FrameResult& r, const std::string& source_pa
       if (!w.keypoint_descriptors.empty())
         store_->putState(keypointDescriptorsKey(w.new_location->id), w.keypoint_descriptors);
     }
+    if (!w.latest_view.empty() && w.frame.location_id)
+      store_->putState(latestViewKey(*w.frame.location_id), w.latest_view);
     if (w.frame.location_id) store_->addCoveredFrame(*w.frame.location_id, r.frame_id);
     if (w.weight) store_->updateWeight(w.weight->first, w.weight->second);
     for (const auto& l : w.links) store_->insertLink(l.location_a, l.location_b, l.type, l.score);

@@ -185,6 +185,12 @@ QueryResult MapImpl::query(const cv::Mat& image, std::size_t top_k) {
         match.inliers = g.inliers;
         match.verified = g.passed;
         if (g.passed) match.pose = closurePose(id, g, &match.no_pose_reason);
+        // A place of several frames is ranked by the view closer to the query's, as mapping
+        // names it (latest_view.h); its pose stays in its first frame's camera.
+        if (const std::optional<GeometricView> latest = g.passed ? latestView(id) : std::nullopt) {
+          const GeometricResult l = checkGeometry(view, *latest, geometry);
+          if (l.passed) match.inliers = std::max(match.inliers, l.inliers);
+        }
         ++result.checked;
       }
     };

@@ -67,6 +67,31 @@ std::optional<GeometricView> MapImpl::placeView(LocationId location) {
   return viewOf(keypoints);
 }
 
+std::optional<GeometricView> MapImpl::latestView(LocationId location) const {
+  if (!options_.geometry_latest_view) return std::nullopt;
+  const auto bytes = store_->getState(latestViewKey(location));
+  if (!bytes) return std::nullopt;
+  const std::optional<LatestView> latest = decodeLatestView(*bytes, vocabulary_->dim());
+  if (!latest || latest->keypoints.points.empty()) return std::nullopt;
+  return viewOf(latest->keypoints);
+}
+
+std::optional<GeometricResult> MapImpl::bestViewComparison(LocationId location,
+                                                           const GeometricView& query,
+                                                           int at_least) {
+  const GeometricCheckSettings compare = toGeometricCheckSettings(options_);
+  std::optional<GeometricResult> best;
+  if (const std::optional<GeometricView> view = placeView(location))
+    best = compareGeometry(query, *view, compare, at_least);
+  if (const std::optional<GeometricView> latest = latestView(location)) {
+    const int beat = best ? std::max(at_least, best->inliers + 1) : at_least;
+    GeometricResult g = compareGeometry(query, *latest, compare, beat);
+    g.latest_view = true;
+    if (!best || g.inliers > best->inliers) best = std::move(g);
+  }
+  return best;
+}
+
 GeometricView MapImpl::viewOf(const CachedKeypoints& keypoints) const {
   GeometricView view;
   view.points = keypoints.points;
@@ -148,18 +173,14 @@ std::vector<LocationId> MapImpl::nearLastClosure(std::int64_t frame_id) const {
 
 std::optional<AgreeingPlace> MapImpl::agreeingPlace(LocationId accepted,
                                                     const GeometricView& query) {
-  const GeometricCheckSettings compare = toGeometricCheckSettings(options_);
   const auto inWm = [this](LocationId id) { return tiers_->isIn(id, Tier::kWm); };
   std::vector<LocationId> neighbours;
   for (const auto& [id, depth] :
        graph_.withinLinks(accepted, 1, inWm, LinkWalk::kNeighbourLinksOnly))
     neighbours.push_back(id);
-  return mostAgreeingPlace(accepted, neighbours,
-                           [&](LocationId c, int at_least) -> std::optional<GeometricResult> {
-                             const std::optional<GeometricView> view = placeView(c);
-                             if (!view) return std::nullopt;
-                             return compareGeometry(query, *view, compare, at_least);
-                           });
+  return mostAgreeingPlace(accepted, neighbours, [&](LocationId c, int at_least) {
+    return bestViewComparison(c, query, at_least);
+  });
 }
 
 SceneShare MapImpl::sceneOf(const GeometricResult& place, LocationId own_view,
@@ -465,6 +486,9 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   }
   v.location = reported;
   v.geometry = *result;
+  if (v.passed && outcome.accepted && result->latest_view && options_.hasIntrinsics())
+    if (const std::optional<GeometricView> view = placeView(reported))
+      v.pose_geometry = compareGeometry(query, *view, toGeometricCheckSettings(options_));
   v.continues_run = std::binary_search(near.begin(), near.end(), reported);
   v.inliers = result->inliers;
   v.matches = result->matches;

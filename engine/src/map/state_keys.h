@@ -36,4 +36,10 @@ inline std::string keypointDescriptorsKey(std::int64_t location_id) {
   return storage::locationKeypointsKey(location_id);
 }
 
+// "latest_view/<id>": the view of the latest frame merged into a location (latest_view.h),
+// replaced at each merge; storage deletes it with the location.
+inline std::string latestViewKey(std::int64_t location_id) {
+  return storage::locationLatestViewKey(location_id);
+}
+
 }  // namespace placedb
