@@ -7,8 +7,8 @@
 // agrees on with the frame, and the closure names the one with the most: the view taken from
 // where the camera stands shares the most of the scene with it. A place of several frames is
 // compared by the better of its views, its first frame's and its latest merged frame's
-// (geometry/latest_view.h). The comparison only moves the
-// closure to a neighbour with strictly more agreeing pairs, so a tie keeps the place accepted.
+// (geometry/latest_view.h). The comparison only moves the closure to a neighbour with strictly
+// more agreeing pairs, so a tie keeps the place accepted.
 #include <functional>
 #include <optional>
 #include <vector>
