@@ -393,6 +393,8 @@ TEST_F(PgCli, RobotsCannotTouchOtherRobotsPlacesNorLockTheFleetOut) {
       "UPDATE engine_state SET value = value WHERE key = 'engine.counters'",
       "DELETE FROM engine_state",
       "DELETE FROM filter_posterior",
+      "UPDATE filter_posterior_vector SET probabilities = probabilities",
+      "DELETE FROM filter_posterior_vector",
       "UPDATE kd_nodes SET split_value = 0",
       "DELETE FROM links",
       "UPDATE links SET score = 0 WHERE location_a IN (SELECT id FROM locations WHERE "

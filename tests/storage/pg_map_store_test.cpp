@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "pg_test_server.h"
 #include "placedb/storage/map_check.h"
@@ -204,6 +206,82 @@ TEST(PgMapStore, DamagedRowsAreRefusedOnReadAndListedByCheck) {
   EXPECT_EQ(report.findings[1].table, "location_word_descriptors");
   EXPECT_EQ(report.findings[1].row, "2");
   EXPECT_EQ(report.findings[2].table, "kd_nodes");
+}
+
+// The rows of a query, each as its cells joined by '|'; an error is one row "error SQLSTATE".
+std::vector<std::string> pgRows(const std::string& uri, const std::string& sql) {
+  PGconn* conn = PQconnectdb(uri.c_str());
+  PGresult* r = PQexec(conn, sql.c_str());
+  std::vector<std::string> rows;
+  if (PQresultStatus(r) == PGRES_FATAL_ERROR) {
+    const char* state = PQresultErrorField(r, PG_DIAG_SQLSTATE);
+    rows.push_back(std::string("error ") + (state ? state : ""));
+  }
+  for (int i = 0; PQresultStatus(r) == PGRES_TUPLES_OK && i < PQntuples(r); ++i) {
+    std::string row;
+    for (int c = 0; c < PQnfields(r); ++c) row += (c ? "|" : "") + std::string(PQgetvalue(r, i, c));
+    rows.push_back(row);
+  }
+  PQclear(r);
+  PQfinish(conn);
+  return rows;
+}
+
+// Schema 18 keeps a writer's posterior as one row of arrays behind views with the old tables'
+// columns (migrations/pg/0018 says why). A map written at 17 keeps every row; a role granted the
+// old tables keeps its privileges on the views and on the tables behind them; SQL through the
+// views changes the arrays with the old keys; and the store's posterior is what the view shows.
+TEST(PgMapStore, SchemaEighteenKeepsThePosteriorRowsTheirKeysAndGrants) {
+  PLACEDB_REQUIRE_PG_SERVER(server);
+  const std::string uri = freshPgDatabase(server, pgTestDatabaseName());
+  for (const Migration& m : pgMigrations())
+    if (m.version <= 17) pgAdmin(uri, m.sql);
+  pgAdmin(uri,
+          "INSERT INTO placedb_meta (key, value) VALUES ('schema_version', '17'), "
+          "('application_id', '1347175490')");
+  pgAdmin(uri,
+          "INSERT INTO sessions (id, started_at, software_version, source) VALUES (1, 't', 'v', "
+          "'a'), (2, 't', 'v', 'b')");
+  pgAdmin(uri, "INSERT INTO filter_posterior VALUES (7, 0.25, 11), (3, 0.75, 12)");
+  pgAdmin(uri, "INSERT INTO session_posterior VALUES (2, 5, 1), (2, 4, 0)");
+  pgAdmin(uri,
+          "DO $$ BEGIN CREATE ROLE placedb_posterior_robot; EXCEPTION WHEN duplicate_object "
+          "THEN NULL; END $$");
+  pgAdmin(uri, "GRANT SELECT, INSERT, UPDATE ON filter_posterior TO placedb_posterior_robot");
+  openMapStore(uri, OpenMode::kReadWrite);  // migrates
+  const std::string rows = "SELECT * FROM filter_posterior ORDER BY location_id";
+  EXPECT_EQ(pgRows(uri, rows), (std::vector<std::string>{"3|0.75|12", "7|0.25|11"}));
+  EXPECT_EQ(pgRows(uri, "SELECT * FROM session_posterior ORDER BY location_id"),
+            (std::vector<std::string>{"2|4|0", "2|5|1"}));
+  for (const char* relation : {"filter_posterior", "filter_posterior_vector"})
+    EXPECT_EQ(pgRows(uri, std::string("SELECT has_table_privilege('placedb_posterior_robot', '") +
+                              relation +
+                              "', 'UPDATE'), has_table_privilege("
+                              "'placedb_posterior_robot', '" +
+                              relation + "', 'DELETE')"),
+              std::vector<std::string>{"t|f"})
+        << relation;
+
+  EXPECT_EQ(pgRows(uri, "INSERT INTO filter_posterior VALUES (7, 0.5, 1)"),
+            std::vector<std::string>{"error 23505"});
+  EXPECT_EQ(pgRows(uri, "INSERT INTO filter_posterior VALUES (8, NULL, 1)"),
+            std::vector<std::string>{"error 23502"});
+  pgAdmin(uri, "INSERT INTO filter_posterior VALUES (9, 0.5, 13)");
+  pgAdmin(uri, "UPDATE filter_posterior SET probability = 0.125 WHERE location_id = 3");
+  pgAdmin(uri, "DELETE FROM filter_posterior WHERE location_id = 7");
+  pgAdmin(uri, "INSERT INTO session_posterior VALUES (2, 6, 0.5), (1, 6, 1)");
+  EXPECT_EQ(pgRows(uri, rows), (std::vector<std::string>{"3|0.125|12", "9|0.5|13"}));
+  EXPECT_EQ(pgRows(uri,
+                   "SELECT session_id, cardinality(location_ids) FROM "
+                   "session_posterior_vectors ORDER BY 1"),
+            (std::vector<std::string>{"1|1", "2|3"}));
+
+  auto store = openMapStore(uri, OpenMode::kReadWrite);
+  store->putPosterior({{4, 0.5}, {2, 0.5}});
+  EXPECT_EQ(store->loadPosterior(),
+            (std::vector<std::pair<std::int64_t, double>>{{2, 0.5}, {4, 0.5}}));
+  EXPECT_EQ(pgRows(uri, "SELECT location_id, probability FROM filter_posterior ORDER BY 1"),
+            (std::vector<std::string>{"2|0.5", "4|0.5"}));
 }
 
 // Schema 16 dropped word_refs' keys on its word and location (migrations/pg/0016 says why): the

@@ -102,8 +102,8 @@ void PgMapStore::copyMainLineMemory(std::int64_t session_id) {
       "  SELECT $1, key, value, checksum FROM engine_state WHERE key = ANY($2)), "
       "k AS (INSERT INTO session_kd_nodes SELECT $1, tree, node, left_child, right_child, "
       "  split_dim, split_value, checksum FROM kd_nodes), "
-      "p AS (INSERT INTO session_posterior SELECT $1, location_id, probability "
-      "  FROM filter_posterior) "
+      "p AS (INSERT INTO session_posterior_vectors SELECT $1, location_ids, probabilities "
+      "  FROM filter_posterior_vector) "
       "INSERT INTO session_memory (session_id, location_id, tier, wm_age) "
       "SELECT $1, l.id, l.tier, w.wm_age FROM locations l "
       "LEFT JOIN wm_entries w ON w.location_id = l.id WHERE l.tier IN (0, 1)",
@@ -262,11 +262,9 @@ void PgMapStore::sidePutPosterior(const std::vector<std::int64_t>& ids,
                                   const std::vector<double>& probabilities) {
   auto scope = writeScope();
   db_->send(
-      "WITH gone AS (DELETE FROM session_posterior p WHERE p.session_id = $1 AND NOT EXISTS "
-      "(SELECT 1 FROM unnest($2::int8[]) AS k(id) WHERE k.id = p.location_id)) "
-      "INSERT INTO session_posterior (session_id, location_id, "
-      "probability) SELECT $1, * FROM unnest($2::int8[], $3::float8[]) ON CONFLICT (session_id, "
-      "location_id) DO UPDATE SET probability = excluded.probability",
+      "INSERT INTO session_posterior_vectors (session_id, location_ids, probabilities) VALUES "
+      "($1, $2, $3) ON CONFLICT (session_id) DO UPDATE SET location_ids = excluded.location_ids, "
+      "probabilities = excluded.probabilities",
       detail::PgParams().add(side_session_).addArray(ids).addArray(probabilities));
   scope.commit();
 }

@@ -207,16 +207,13 @@ void PgMapStore::putPosterior(const std::vector<std::pair<std::int64_t, double>>
   }
   if (side_session_) return sidePutPosterior(ids, probabilities);
   auto scope = writeScope();
-  // One statement, one round trip: both parts see the table as it was, so rows that stay are
-  // updated rather than deleted and inserted again (which would collide on the key). The rows
-  // that go are found by a hashed anti-join: `<> ALL($1)` compared every row with every id, a
-  // third of the server's time per frame on lip6 (bench/fleet/README.md).
+  // One row of arrays (schema 18, migrations/pg/0018 says why): the normalisation changes every
+  // entry every frame, so rows per entry were all rewritten each frame.
   db_->send(
-      "WITH gone AS (DELETE FROM filter_posterior f WHERE NOT EXISTS (SELECT 1 FROM "
-      "unnest($1::int8[]) AS k(id) WHERE k.id = f.location_id)) "
-      "INSERT INTO filter_posterior (location_id, probability, checksum) SELECT * FROM "
-      "unnest($1::int8[], $2::float8[], $3::int8[]) ON CONFLICT (location_id) DO UPDATE SET "
-      "probability = excluded.probability, checksum = excluded.checksum",
+      "INSERT INTO filter_posterior_vector (one_row, location_ids, probabilities, checksums) "
+      "VALUES (true, $1, $2, $3) ON CONFLICT (one_row) DO UPDATE SET location_ids = "
+      "excluded.location_ids, probabilities = excluded.probabilities, checksums = "
+      "excluded.checksums",
       detail::PgParams().addArray(ids).addArray(probabilities).addArray(sums));
   scope.commit();
 }

@@ -1,7 +1,67 @@
 // PgMapStore: whole tables read and written as they are, for copyMap().
 #include "postgres/pg_map_store.h"
 
+#include <optional>
+
 namespace placedb::storage {
+
+namespace {
+
+std::optional<std::int64_t> cellInteger(const CellValue& v) {
+  if (v.kind == CellValue::Kind::kNull) return std::nullopt;
+  return v.kind == CellValue::Kind::kReal ? static_cast<std::int64_t>(v.real) : v.integer;
+}
+
+double cellReal(const CellValue& v) {
+  return v.kind == CellValue::Kind::kInteger ? static_cast<double>(v.integer) : v.real;
+}
+
+// The posterior's views (schema 18, migrations/pg/0018) take rows one at a time through a
+// trigger that rewrites their writer's arrays: a copy appends a batch to them in one statement.
+void appendPosteriorRows(detail::PgConnection& db, const std::string& label, const TableColumns& t,
+                         const std::vector<TableRow>& rows) {
+  const bool side = t.table == "session_posterior";
+  auto column = [&](const char* name) {
+    for (std::size_t c = 0; c < t.columns.size(); ++c)
+      if (t.columns[c] == name) return c;
+    throw StorageError(ErrorCode::kMapRefused,
+                       "map " + label + " lacks column " + t.table + "." + name);
+  };
+  const std::size_t id = column("location_id"), p = column("probability");
+  const std::size_t other = side ? column("session_id") : column("checksum");
+  std::vector<std::int64_t> ids;
+  std::vector<double> probabilities;
+  std::vector<std::optional<std::int64_t>> others;
+  for (const TableRow& row : rows) {
+    const auto location = cellInteger(row[id]);
+    if (!location || row[p].kind == CellValue::Kind::kNull)
+      throw StorageError(ErrorCode::kMapRefused, "map " + label + ": a " + t.table +
+                                                     " row has a NULL location_id or probability");
+    ids.push_back(*location);
+    probabilities.push_back(cellReal(row[p]));
+    others.push_back(cellInteger(row[other]));
+  }
+  if (side) {
+    db.send(
+        "INSERT INTO session_posterior_vectors AS v (session_id, location_ids, probabilities) "
+        "SELECT s, array_agg(i ORDER BY o), array_agg(p ORDER BY o) FROM unnest($1::int8[], "
+        "$2::int8[], $3::float8[]) WITH ORDINALITY AS u(s, i, p, o) GROUP BY s ON CONFLICT "
+        "(session_id) DO UPDATE SET location_ids = v.location_ids || excluded.location_ids, "
+        "probabilities = v.probabilities || excluded.probabilities",
+        detail::PgParams().addArray(others).addArray(ids).addArray(probabilities));
+  } else {
+    db.send(
+        "INSERT INTO filter_posterior_vector AS v (one_row, location_ids, probabilities, "
+        "checksums) SELECT true, array_agg(i ORDER BY o), array_agg(p ORDER BY o), array_agg(s "
+        "ORDER BY o) FROM unnest($1::int8[], $2::float8[], $3::int8[]) WITH ORDINALITY AS u(i, "
+        "p, s, o) ON CONFLICT (one_row) DO UPDATE SET location_ids = v.location_ids || "
+        "excluded.location_ids, probabilities = v.probabilities || excluded.probabilities, "
+        "checksums = v.checksums || excluded.checksums",
+        detail::PgParams().addArray(ids).addArray(probabilities).addArray(others));
+  }
+}
+
+}  // namespace
 
 void PgMapStore::readTable(const TableColumns& t,
                            const std::function<void(const TableRow&)>& row) const {
@@ -19,6 +79,10 @@ void PgMapStore::readTable(const TableColumns& t,
 void PgMapStore::writeRows(const TableColumns& t, const std::vector<TableRow>& rows) {
   auto scope = writeScope();
   if (rows.empty()) return scope.commit();
+  if (t.table == "filter_posterior" || t.table == "session_posterior") {
+    appendPosteriorRows(*db_, label_, t, rows);
+    return scope.commit();
+  }
   // Each column's type, so that every value is sent as its column wants it (a SQLite map may
   // hold text where this one holds bytea, an integer where it holds a double).
   const auto types = db_->run(
