@@ -282,6 +282,11 @@ TEST(PgMapStore, SchemaEighteenKeepsThePosteriorRowsTheirKeysAndGrants) {
             (std::vector<std::pair<std::int64_t, double>>{{2, 0.5}, {4, 0.5}}));
   EXPECT_EQ(pgRows(uri, "SELECT location_id, probability FROM filter_posterior ORDER BY 1"),
             (std::vector<std::string>{"2|0.5", "4|0.5"}));
+  // A probability changed in the arrays themselves fails its row's checksum, as a row did.
+  pgAdmin(uri, "UPDATE filter_posterior_vector SET probabilities[1] = 0.25");
+  std::string message;
+  EXPECT_EQ(codeOf([&] { store->loadPosterior(); }, &message), ErrorCode::kMapRefused);
+  EXPECT_NE(message.find("filter_posterior row 4"), std::string::npos) << message;
 }
 
 // Schema 16 dropped word_refs' keys on its word and location (migrations/pg/0016 says why): the
