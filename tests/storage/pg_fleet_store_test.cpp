@@ -5,9 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "pg_test_server.h"
 #include "placedb/storage/map_check.h"
+#include "placedb/storage/map_copy.h"
 #include "placedb/storage/map_store.h"
 #include "storage_test_util.h"
 #include "test_paths.h"
@@ -192,6 +195,50 @@ TEST(PgFleetStore, CheckVerifiesTheSideSessionsRows) {
             std::string::npos)
       << report.findings[1].problem;
   EXPECT_EQ(report.rows_checked.at("session_kd_nodes"), 1);
+}
+
+// Each writer's posterior is one row of arrays on a server (schema 18): a copy to a file takes
+// them as rows, and a copy back into another server database makes the arrays again.
+TEST(PgFleetStore, ACopyCarriesEveryWritersPosterior) {
+  PLACEDB_REQUIRE_PG_SERVER(server);
+  const std::string uri = freshPgDatabase(server, pgTestDatabaseName());
+  std::int64_t s2 = 0;
+  {
+    auto main = openMapStore(uri, OpenMode::kReadWrite);
+    const auto s1 = main->beginSession("a", {}, "test");
+    for (int i = 0; i < 3; ++i) testing::writeFrame(*main, s1, i);
+    main->putPosterior({{-1, 0.25}, {2, 0.5}, {3, 0.25}});
+    auto side = sideWriter(uri);
+    {
+      Transaction tx = side->begin();
+      s2 = side->beginSideSession("b", {}, "test");
+      tx.commit();
+    }
+    side->putPosterior({{-1, 0.125}, {3, 0.875}});
+  }
+  const auto dir = placedb::testing::scratchDir("PgFleetStore_ACopyCarriesEveryWritersPosterior");
+  const std::string file = (dir / "copy.placedb").string();
+  const std::string back = freshPgDatabase(server, pgTestDatabaseName() + "_back");
+  {
+    auto from = openMapStore(uri, OpenMode::kReadOnly);
+    auto to = openMapStore(file, OpenMode::kReadWrite);
+    copyMap(*from, *to);
+  }
+  {
+    auto from = openMapStore(file, OpenMode::kReadOnly);
+    auto to = openMapStore(back, OpenMode::kReadWrite);
+    copyMap(*from, *to);
+  }
+  for (const std::string& map : {file, back}) {
+    auto main = openMapStore(map, OpenMode::kReadOnly);
+    EXPECT_EQ(main->loadPosterior(),
+              (std::vector<std::pair<std::int64_t, double>>{{-1, 0.25}, {2, 0.5}, {3, 0.25}}))
+        << map;
+  }
+  auto side = sideWriter(back);
+  side->useSideMemory(s2);
+  EXPECT_EQ(side->loadPosterior(),
+            (std::vector<std::pair<std::int64_t, double>>{{-1, 0.125}, {3, 0.875}}));
 }
 
 // A file has one writer: it holds the main line, no side session begins, and a side session a
