@@ -197,8 +197,8 @@ TEST(CliFaults, SchemaVersionBelowTheTablesIsOneLineRefusal) {
   auto seq = smallSequence(6);
   auto dir = scratchDir("CliFaults_user_version");
   auto map = mappedCopy(seq, dir, "m.placedb", {"--stop-after", "3"});
-  // The schema before the last one that changed a file's tables: schemas 16 to 18 changed the
-  // server's alone (migrations/0016-0018), so a file marked 15 to 17 is one to upgrade, not one
+  // The schema before the last one that changed a file's tables: schemas 16 to 19 changed the
+  // server's alone (migrations/0016-0019), so a file marked 15 to 18 is one to upgrade, not one
   // below its tables.
   constexpr int kBelow = 14;
   sqlExec(map, "PRAGMA user_version = " + std::to_string(kBelow));

@@ -289,6 +289,34 @@ TEST(PgMapStore, SchemaEighteenKeepsThePosteriorRowsTheirKeysAndGrants) {
   EXPECT_NE(message.find("filter_posterior row 4"), std::string::npos) << message;
 }
 
+// Schema 19 dropped words' key on their creating frame (migrations/pg/0019 says why): check must
+// find a word whose frame was deleted. The frame goes with the server's key triggers off, as only
+// the owner can (the other keys that name it are not check's to report: the server keeps them).
+TEST(PgMapStore, CheckFindsWordsWhoseFrameWasDeleted) {
+  PLACEDB_REQUIRE_PG_SERVER(server);
+  const std::string uri = freshPgDatabase(server, pgTestDatabaseName());
+  {
+    auto store = openMapStore(uri, OpenMode::kReadWrite);
+    const auto session = store->beginSession("src", {}, "test");
+    for (int i = 0; i < 2; ++i) testing::writeFrame(*store, session, i);
+  }
+  EXPECT_TRUE(checkMap(uri).ok());
+  EXPECT_EQ(pgRows(uri,
+                   "SELECT count(*) FROM pg_constraint WHERE conrelid = 'words'::regclass "
+                   "AND contype = 'f' AND conkey = ARRAY[(SELECT attnum FROM pg_attribute "
+                   "WHERE attrelid = 'words'::regclass AND attname = 'created_frame')]"),
+            std::vector<std::string>{"0"});
+  pgAdmin(uri, "SET session_replication_role = replica; DELETE FROM frames WHERE id = 2");
+  const CheckReport report = checkMap(uri);
+  std::vector<std::string> words;
+  for (const auto& f : report.findings)
+    if (f.table == "words") words.push_back(f.row + ": " + f.problem);
+  EXPECT_EQ(words, (std::vector<std::string>{"5: names created frame 2, which is missing",
+                                             "6: names created frame 2, which is missing",
+                                             "7: names created frame 2, which is missing",
+                                             "8: names created frame 2, which is missing"}));
+}
+
 // Schema 16 dropped word_refs' keys on its word and location (migrations/pg/0016 says why): the
 // server no longer refuses deleting a referenced word or location, so check must find the
 // references left dangling; and the store deletes a location's references with it.

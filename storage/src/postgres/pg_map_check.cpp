@@ -185,6 +185,13 @@ class PgChecker {
            dangling.boolean(i, 3)
                ? "names word " + std::to_string(dangling.integer(i, 2)) + ", which is missing"
                : "names location " + std::to_string(dangling.integer(i, 0)) + ", which is missing");
+    // Nor has words.created_frame since schema 19 (migrations/pg/0019).
+    const auto orphans = db_.run(
+        "SELECT w.id, w.created_frame FROM words w WHERE w.created_frame IS NOT NULL AND NOT "
+        "EXISTS (SELECT 1 FROM frames f WHERE f.id = w.created_frame) ORDER BY 1");
+    for (int i = 0; i < orphans.rows(); ++i)
+      find("words", std::to_string(orphans.integer(i, 0)),
+           "names created frame " + std::to_string(orphans.integer(i, 1)) + ", which is missing");
   }
 
  private:
