@@ -119,6 +119,18 @@ TEST_P(LocationWords, DeletingALocationDeletesItsEngineStateRows) {
   EXPECT_EQ(store_->getState(locationLatestViewKey(1)), bytes);
 }
 
+// Its posterior entry goes with it (a row in a file, an element of the arrays on a server, schema
+// 18); the others keep their order and values.
+TEST_P(LocationWords, DeletingALocationDeletesItsPosteriorEntry) {
+  using Posterior = std::vector<std::pair<std::int64_t, double>>;
+  store_->putPosterior({{-1, 0.25}, {1, 0.75}});
+  store_->deleteLocation(2);  // not in the posterior: it stays as it was
+  EXPECT_EQ(store_->loadPosterior(), (Posterior{{-1, 0.25}, {1, 0.75}}));
+  store_->putPosterior({{-1, 0.25}, {1, 0.25}, {2, 0.5}});
+  store_->deleteLocation(1);
+  EXPECT_EQ(store_->loadPosterior(), (Posterior{{-1, 0.25}, {2, 0.5}}));
+}
+
 #ifdef PLACEDB_RECORDS_ON_PG
 INSTANTIATE_TEST_SUITE_P(Postgresql, LocationWords, ::testing::Values(std::string("postgresql")));
 #else
