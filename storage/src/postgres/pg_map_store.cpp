@@ -515,11 +515,8 @@ void PgMapStore::setTier(const std::vector<std::int64_t>& location_ids, Tier tie
 void PgMapStore::deleteLocation(std::int64_t location_id) {
   auto scope = writeScope();
   db_->send(
-      "WITH i AS (SELECT array_position(location_ids, $1) AS i FROM filter_posterior_vector), "
-      "p AS (UPDATE filter_posterior_vector v SET location_ids = v.location_ids[:i.i - 1] || "
-      "v.location_ids[i.i + 1:], probabilities = v.probabilities[:i.i - 1] || "
-      "v.probabilities[i.i + 1:], checksums = v.checksums[:i.i - 1] || v.checksums[i.i + 1:] "
-      "FROM i WHERE i.i IS NOT NULL), "
+      // The view's trigger removes the entry from the posterior's arrays (migrations/pg/0018).
+      "WITH p AS (DELETE FROM filter_posterior WHERE location_id = $1), "
       "k AS (DELETE FROM engine_state WHERE key IN ($2, $3)), "
       // No key cascades a location's references since schema 16 (migrations/pg/0016).
       "r AS (DELETE FROM word_refs WHERE location_id = $1), "
