@@ -262,13 +262,10 @@ TEST_F(PgCli, CredentialsNeverShowAndRefusalsHaveTheirCodes) {
   expectCleanError(write, 6, "permission denied");
   EXPECT_EQ(write.err.find("read-only-sesame"), std::string::npos) << write.err;
 
-  PGconn* conn = PQconnectdb(uri.c_str());
-  PGresult* r = PQexec(conn,
-                       "SELECT count(*) FROM sessions s, settings t WHERE "
-                       "s.source || s.software_version || t.value LIKE '%sesame%'");
-  EXPECT_STREQ(PQgetvalue(r, 0, 0), "0");
-  PQclear(r);
-  PQfinish(conn);
+  EXPECT_EQ(pgRows(uri,
+                   "SELECT count(*) FROM sessions s, settings t WHERE "
+                   "s.source || s.software_version || t.value LIKE '%sesame%'"),
+            std::vector<std::string>{"0"});
 }
 
 // SCHEMA.md's least-privilege robot: with exactly its grants, a robot whose password comes from

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace placedb::testing {
 
@@ -47,6 +48,25 @@ inline void pgAdmin(const std::string& server_uri, const std::string& sql) {
       << sql << ": " << PQresultErrorMessage(r);
   PQclear(r);
   PQfinish(conn);
+}
+
+// The rows of a query, each as its cells joined by '|'; an error is one row "error SQLSTATE".
+inline std::vector<std::string> pgRows(const std::string& uri, const std::string& sql) {
+  PGconn* conn = PQconnectdb(uri.c_str());
+  PGresult* r = PQexec(conn, sql.c_str());
+  std::vector<std::string> rows;
+  if (PQresultStatus(r) == PGRES_FATAL_ERROR) {
+    const char* state = PQresultErrorField(r, PG_DIAG_SQLSTATE);
+    rows.push_back(std::string("error ") + (state ? state : ""));
+  }
+  for (int i = 0; PQresultStatus(r) == PGRES_TUPLES_OK && i < PQntuples(r); ++i) {
+    std::string row;
+    for (int c = 0; c < PQnfields(r); ++c) row += (c ? "|" : "") + std::string(PQgetvalue(r, i, c));
+    rows.push_back(row);
+  }
+  PQclear(r);
+  PQfinish(conn);
+  return rows;
 }
 
 // The URI of database `name` on the server, created empty (dropped first when it exists).

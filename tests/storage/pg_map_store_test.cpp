@@ -19,6 +19,7 @@ namespace {
 
 using placedb::testing::freshPgDatabase;
 using placedb::testing::pgAdmin;
+using placedb::testing::pgRows;
 using placedb::testing::pgTestDatabaseName;
 
 ErrorCode codeOf(const std::function<void()>& action, std::string* message = nullptr) {
@@ -93,15 +94,8 @@ TEST(PgMapStore, SchemaVersionAndViewsMatchSqlite) {
                            "v_links", "v_loop_closures", "v_hypotheses", "v_loop_closure_poses",
                            "v_vocabulary_growth", "v_kd_trees"})
     pgAdmin(uri, std::string("SELECT * FROM ") + view);
-  PGconn* conn = PQconnectdb(uri.c_str());
-  PGresult* r = PQexec(conn,
-                       "SELECT location_a, location_b, first_frame_a, first_frame_b, session_a "
-                       "FROM v_loop_closures");
-  ASSERT_EQ(PQntuples(r), 1);
-  EXPECT_STREQ(PQgetvalue(r, 0, 2), "0");
-  EXPECT_STREQ(PQgetvalue(r, 0, 3), "2");
-  PQclear(r);
-  PQfinish(conn);
+  EXPECT_EQ(pgRows(uri, "SELECT first_frame_a, first_frame_b FROM v_loop_closures"),
+            std::vector<std::string>{"0|2"});
 }
 
 TEST(PgMapStore, ReadOnlyOpenOfAnEmptyDatabaseFindsNoMapAndWritesNothing) {
@@ -123,11 +117,8 @@ TEST(PgMapStore, DatabaseOfAnotherProgramIsRefusedUntouched) {
   EXPECT_EQ(codeOf([&] { openMapStore(uri, OpenMode::kReadWrite); }, &message),
             ErrorCode::kMapRefused);
   EXPECT_NE(message.find("not a placedb map"), std::string::npos) << message;
-  PGconn* conn = PQconnectdb(uri.c_str());
-  PGresult* r = PQexec(conn, "SELECT count(*) FROM pg_tables WHERE schemaname = 'public'");
-  EXPECT_STREQ(PQgetvalue(r, 0, 0), "1");
-  PQclear(r);
-  PQfinish(conn);
+  EXPECT_EQ(pgRows(uri, "SELECT count(*) FROM pg_tables WHERE schemaname = 'public'"),
+            std::vector<std::string>{"1"});
 }
 
 TEST(PgMapStore, NewerSchemaIsRefused) {
@@ -206,25 +197,6 @@ TEST(PgMapStore, DamagedRowsAreRefusedOnReadAndListedByCheck) {
   EXPECT_EQ(report.findings[1].table, "location_word_descriptors");
   EXPECT_EQ(report.findings[1].row, "2");
   EXPECT_EQ(report.findings[2].table, "kd_nodes");
-}
-
-// The rows of a query, each as its cells joined by '|'; an error is one row "error SQLSTATE".
-std::vector<std::string> pgRows(const std::string& uri, const std::string& sql) {
-  PGconn* conn = PQconnectdb(uri.c_str());
-  PGresult* r = PQexec(conn, sql.c_str());
-  std::vector<std::string> rows;
-  if (PQresultStatus(r) == PGRES_FATAL_ERROR) {
-    const char* state = PQresultErrorField(r, PG_DIAG_SQLSTATE);
-    rows.push_back(std::string("error ") + (state ? state : ""));
-  }
-  for (int i = 0; PQresultStatus(r) == PGRES_TUPLES_OK && i < PQntuples(r); ++i) {
-    std::string row;
-    for (int c = 0; c < PQnfields(r); ++c) row += (c ? "|" : "") + std::string(PQgetvalue(r, i, c));
-    rows.push_back(row);
-  }
-  PQclear(r);
-  PQfinish(conn);
-  return rows;
 }
 
 // Schema 18 keeps a writer's posterior as one row of arrays behind views with the old tables'
