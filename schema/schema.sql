@@ -168,6 +168,14 @@ CREATE TABLE kd_nodes (
   PRIMARY KEY (tree, node)
 ) WITHOUT ROWID;
 
+-- The kd-forest's latest changes, a row a frame (schema 20): the forest is kd_nodes with these
+-- applied in seq order; a clean close folds them into kd_nodes.
+CREATE TABLE kd_node_journal (
+  seq INTEGER PRIMARY KEY,
+  changes BLOB NOT NULL,             -- deletions then upserts, little-endian records
+  checksum INTEGER                   -- CRC-32C of seq and changes
+);
+
 -- The Bayes filter posterior after the last committed frame. location_id has no
 -- foreign key on purpose: ids <= 0 stand for the filter's virtual "new place".
 CREATE TABLE filter_posterior (
@@ -321,5 +329,5 @@ INSERT INTO engine_state (key, value, checksum) VALUES ('storage.kd_nodes.rows',
 
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 19;
+PRAGMA user_version = 20;
 COMMIT;

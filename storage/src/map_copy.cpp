@@ -2,6 +2,7 @@
 #include "placedb/storage/map_copy.h"
 
 #include "placedb/storage/map_store.h"
+#include "row_checksums.h"
 
 namespace placedb::storage {
 
@@ -86,6 +87,46 @@ const std::vector<TableColumns>& mapTables() {
   return kTables;
 }
 
+namespace {
+
+// Rows a statement of the destination writes: a server statement takes at most 65,535
+// parameters.
+constexpr std::size_t kBatch = 2000;
+
+CellValue integer(std::int64_t v) {
+  CellValue c;
+  c.kind = CellValue::Kind::kInteger;
+  c.integer = v;
+  return c;
+}
+
+// The source's forest as its store reads it: a file's kd_nodes with its journal applied (schema
+// 20), so the copy's kd_nodes is the whole forest and its row count the copy's own.
+std::int64_t copyKdNodes(const MapStore& from, MapStore& to, const TableColumns& t) {
+  std::vector<TableRow> rows;
+  std::int64_t written = 0;
+  for (const KdNodeRecord& n : from.loadKdNodes()) {
+    CellValue value;
+    value.kind = CellValue::Kind::kReal;
+    value.real = n.split_value;
+    rows.push_back({integer(n.tree), integer(n.node), integer(n.left_child), integer(n.right_child),
+                    integer(n.split_dim), value,
+                    integer(detail::kdNodeChecksum(n.tree, n.node, n.left_child, n.right_child,
+                                                   n.split_dim, n.split_value))});
+    if (rows.size() == kBatch) {
+      to.writeRows(t, rows);
+      written += static_cast<std::int64_t>(rows.size());
+      rows.clear();
+    }
+  }
+  if (!rows.empty()) to.writeRows(t, rows);
+  written += static_cast<std::int64_t>(rows.size());
+  to.putState(detail::kKdNodeRowsKey, std::to_string(written));
+  return written;
+}
+
+}  // namespace
+
 void copyMap(const MapStore& from, MapStore& to,
              const std::function<void(const CopyProgress&)>& progress) {
   if (to.readOnly())
@@ -99,9 +140,12 @@ void copyMap(const MapStore& from, MapStore& to,
   for (const TableColumns& t : mapTables()) {
     // A new map holds its own resume state rows (the kd_nodes row count): the source's replace
     // them.
-    if (t.table == "engine_state")
-      for (const char* key : {"storage.kd_nodes.rows"}) to.deleteState(key);
-    constexpr std::size_t kBatch = 2000;
+    if (t.table == "engine_state") to.deleteState(detail::kKdNodeRowsKey);
+    if (t.table == "kd_nodes") {
+      const std::int64_t rows = copyKdNodes(from, to, t);
+      if (progress) progress({t.table, rows});
+      continue;
+    }
     std::vector<TableRow> batch;
     std::int64_t rows = 0;
     from.readTable(t, [&](const TableRow& row) {

@@ -141,6 +141,13 @@ std::uint32_t kdNodeChecksum(std::int64_t tree, std::int64_t node, std::int64_t 
   return crc.checksum();
 }
 
+std::uint32_t kdJournalChecksum(std::int64_t seq, const void* changes, std::size_t size) {
+  Crc32c crc;
+  addInt(crc, seq);
+  if (size) crc.process_bytes(changes, size);
+  return crc.checksum();
+}
+
 std::uint32_t settingsDigest(std::int64_t session_id, const std::string& source,
                              const std::map<std::string, std::string>& settings) {
   Crc32c crc;

@@ -36,6 +36,8 @@ std::uint32_t locationWordDescriptorsChecksum(std::int64_t location_id, std::int
 std::uint32_t stateChecksum(const std::string& key, const void* value, std::size_t size);
 std::uint32_t kdNodeChecksum(std::int64_t tree, std::int64_t node, std::int64_t left,
                              std::int64_t right, std::int64_t split_dim, double split_value);
+// A kd_node_journal row (schema 20): its seq, then its bytes.
+std::uint32_t kdJournalChecksum(std::int64_t seq, const void* changes, std::size_t size);
 
 // Resume rows without a BLOB that the engine reads back (schema 15): a WM age, a posterior
 // probability.

@@ -180,22 +180,24 @@ TEST_P(ResumeTest, SchemaFourteenMapGetsItsRowRecordsAndResumesExactly) {
   Options options;
   options.wm_max = GetParam();
   auto straight = run("straight_v14_" + std::to_string(GetParam()), options, 0, false);
-  auto upgraded =
-      run("upgraded_v14_" + std::to_string(GetParam()), options, 20, false,
-          [](const std::string& path) {
-            sqlite3* db = nullptr;
-            ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
-            for (const char* sql :
-                 {"ALTER TABLE locations DROP COLUMN held",
-                  "ALTER TABLE locations DROP COLUMN refs_digest",
-                  "ALTER TABLE locations DROP COLUMN checksum",
-                  "ALTER TABLE locations DROP COLUMN link_count",
-                  "ALTER TABLE sessions DROP COLUMN settings_digest",
-                  "ALTER TABLE wm_entries DROP COLUMN checksum",
-                  "ALTER TABLE filter_posterior DROP COLUMN checksum", "PRAGMA user_version = 14"})
-              EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK) << sql;
-            sqlite3_close(db);
-          });
+  auto upgraded = run("upgraded_v14_" + std::to_string(GetParam()), options, 20, false,
+                      [](const std::string& path) {
+                        sqlite3* db = nullptr;
+                        ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+                        for (const char* sql :
+                             {"ALTER TABLE locations DROP COLUMN held",
+                              "ALTER TABLE locations DROP COLUMN refs_digest",
+                              "ALTER TABLE locations DROP COLUMN checksum",
+                              "ALTER TABLE locations DROP COLUMN link_count",
+                              "ALTER TABLE sessions DROP COLUMN settings_digest",
+                              "ALTER TABLE wm_entries DROP COLUMN checksum",
+                              "ALTER TABLE filter_posterior DROP COLUMN checksum",
+                              "DROP TABLE kd_node_journal",  // schema 20: empty once the map closed
+                              "PRAGMA user_version = 14"})
+                          EXPECT_EQ(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), SQLITE_OK)
+                              << sql;
+                        sqlite3_close(db);
+                      });
   expectSame(straight, upgraded);
 }
 
@@ -316,6 +318,7 @@ void downgradeToSchemaTwo(const std::string& path) {
   exec("ALTER TABLE locations DROP COLUMN link_count");
   exec("ALTER TABLE sessions DROP COLUMN settings_digest");
   exec("ALTER TABLE filter_posterior DROP COLUMN checksum");
+  exec("DROP TABLE kd_node_journal");  // schema 20
   exec("PRAGMA user_version = 2");
   exec("COMMIT");
   sqlite3_close(db);

@@ -246,10 +246,12 @@ void Database::commit() {
 }
 
 void Database::rollback() {
+  ++rollbacks_;
   if (inTransaction()) exec("ROLLBACK");
 }
 
 void Database::rollbackQuietly() noexcept {
+  ++rollbacks_;
   if (inTransaction()) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
 }
 

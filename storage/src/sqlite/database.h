@@ -100,6 +100,9 @@ class Database final : public TransactionControl {
   void rollbackQuietly() noexcept override;
   void beginRead() override;
   void endReadQuietly() noexcept override;
+  // How many times a transaction was (or may have been) rolled back on this connection: a change
+  // kept in RAM beside the file is stale when this moved since it was made.
+  std::uint64_t rollbacks() const { return rollbacks_; }
 
   // Shown in error messages (the map path).
   void setLabel(std::string label) { label_ = std::move(label); }
@@ -109,6 +112,7 @@ class Database final : public TransactionControl {
   sqlite3* db_ = nullptr;
   std::string label_;
   std::unordered_map<std::string, std::unique_ptr<Statement>> statements_;
+  std::uint64_t rollbacks_ = 0;
 };
 
 }  // namespace placedb::storage::detail

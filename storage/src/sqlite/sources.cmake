@@ -1,6 +1,7 @@
 # The SQLite backend: a map in one file (with its -wal, -shm and lock side files).
 target_sources(placedb_storage PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/database.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/kd_node_journal.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sqlite_checksums.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sqlite_location_rows.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sqlite_map_check.cpp

@@ -11,6 +11,7 @@
 #include "placedb/storage/map_store.h"
 #include "placedb/storage/migrations.h"
 #include "sqlite/database.h"
+#include "sqlite/kd_node_journal.h"
 #include "sqlite/map_file_check.h"
 #include "sqlite/sqlite_checksums.h"
 #include "sqlite/sqlite_location_rows.h"
@@ -21,6 +22,7 @@ namespace {
 // The first schema with fleet maps' tables (side sessions a copy may bring).
 constexpr int kFleetSchemaVersion = 11;
 constexpr int kLocationWordsSchemaVersion = 13;
+constexpr int kKdNodeJournalSchemaVersion = 20;
 
 using detail::Database;
 using detail::Statement;
@@ -147,6 +149,20 @@ class Checker {
       find("kd_nodes", "",
            "holds " + std::to_string(kd_rows) + " rows where the map recorded " + kd_rows_text +
                " (rows were deleted or added)");
+  }
+
+  // The kd-forest's journalled changes (schema 20): each row's sum, and whole records.
+  void kdNodeJournal() {
+    rows("kd_node_journal", "SELECT seq, changes, checksum FROM kd_node_journal",
+         [&](const Statement& s) {
+           const std::int64_t seq = s.columnInt(0);
+           const auto [data, size] = s.columnBlobView(1);
+           detail::KdNodeChanges changes;
+           if (!detail::checksumMatches(s, 2, detail::kdJournalChecksum(seq, data, size)))
+             find("kd_node_journal", std::to_string(seq), "fails its checksum");
+           else if (!detail::unpackKdNodeChanges(data, size, &changes))
+             find("kd_node_journal", std::to_string(seq), "is not whole node changes");
+         });
   }
 
   // The copies of each location's words (schema 13).
@@ -325,6 +341,7 @@ CheckReport checkSqliteMap(const std::string& given_path, const CheckOptions& op
     if (report.checksums) checker.checksums();
     if (report.schema_version >= kFleetSchemaVersion) checker.sideSessions();
     if (report.schema_version >= kLocationWordsSchemaVersion) checker.locationWordDescriptors();
+    if (report.schema_version >= kKdNodeJournalSchemaVersion) checker.kdNodeJournal();
     if (report.schema_version >= detail::kLocationRowsSchemaVersion) checker.locationRows();
     checker.values();
     if (report.ok() && options.last_check && report.schema_version == currentSchemaVersion()) {

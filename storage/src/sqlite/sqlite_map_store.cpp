@@ -13,6 +13,7 @@
 #include "placedb/storage/migrations.h"
 #include "row_checksums.h"
 #include "sqlite/database.h"
+#include "sqlite/kd_node_journal.h"
 #include "sqlite/map_file_check.h"
 #include "sqlite/migrations_apply.h"
 #include "sqlite/sqlite_checksums.h"
@@ -178,6 +179,7 @@ SqliteMapStore::SqliteMapStore(const std::string& given_path, OpenMode mode,
     detail::checkSchemaObjects(*db_, path, current);
     db_->exec("PRAGMA foreign_keys = ON");
     checkpointer_ = std::make_unique<detail::WalCheckpointer>(db_->handle(), path);
+    kd_pending_ = std::make_unique<detail::PendingKdNodes>();
   } catch (...) {
     checkpointer_.reset();
     db_.reset();
@@ -187,6 +189,7 @@ SqliteMapStore::SqliteMapStore(const std::string& given_path, OpenMode mode,
 }
 
 SqliteMapStore::~SqliteMapStore() {
+  foldKdNodeJournalAtClose();
   checkpointer_.reset();
   db_.reset();  // the last connection checkpoints and removes the -wal file
   if (lock_fd_ >= 0) ::close(lock_fd_);
@@ -265,6 +268,7 @@ void SqliteMapStore::endSession(std::int64_t session_id, bool clean) {
   if (sqlite3_changes(db_->handle()) != 1) {
     throw StorageError(ErrorCode::kInvalidArgument, "no session " + std::to_string(session_id));
   }
+  if (clean) foldWholeKdNodeJournal();
   scope.commit();
 }
 

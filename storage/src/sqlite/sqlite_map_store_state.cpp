@@ -4,6 +4,7 @@
 
 #include "placedb/storage/sqlite_map_store.h"
 #include "sqlite/database.h"
+#include "sqlite/kd_node_journal.h"
 #include "sqlite/sqlite_checksums.h"
 #include "sqlite/sqlite_location_rows.h"
 #include "sqlite/sqlite_rows.h"
@@ -80,63 +81,141 @@ std::int64_t SqliteMapStore::storedKdNodeRows() const {
   detail::refuseDamagedRow(path_, "engine_state", detail::kKdNodeRowsKey, "is not a row count");
 }
 
-void SqliteMapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
-                                  const std::vector<std::pair<int, std::int64_t>>& deletions,
-                                  bool replace_all) {
-  auto scope = writeScope();
-  std::int64_t rows = 0;
-  if (replace_all) {
-    auto s = db_->cached("DELETE FROM kd_nodes");
-    s->run();
-  } else {
-    rows = storedKdNodeRows();
-  }
-  if (!deletions.empty()) {
-    auto s = db_->cached("DELETE FROM kd_nodes WHERE tree = ?1 AND node = ?2");
-    for (const auto& [tree, node] : deletions) {
+namespace {
+
+// Applies `changes` to kd_nodes in their order, keeping `rows` its row count: an upsert inserts
+// where the node had no row (most are splits), else updates it, and a plain insert last makes a
+// row neither could write fail as it should. The row count follows without a count(*).
+void applyToKdNodes(detail::Database& db, const detail::KdNodeChanges& changes,
+                    std::int64_t& rows) {
+  if (!changes.deletions.empty()) {
+    auto s = db.cached("DELETE FROM kd_nodes WHERE tree = ?1 AND node = ?2");
+    for (const auto& [tree, node] : changes.deletions) {
       s->bind(1, std::int64_t(tree));
       s->bind(2, node);
       s->run();
-      rows -= sqlite3_changes(db_->handle());
+      rows -= sqlite3_changes(db.handle());
     }
   }
-  if (!upserts.empty()) {
-    // Most upserts are splits, whose node had no row: an insert that gives way to an existing
-    // row first, then the update, and a plain insert last, so that a row neither could write
-    // fails as it should. The row count follows without a count(*).
-    auto add = db_->cached(
-        "INSERT OR IGNORE INTO kd_nodes (tree, node, left_child, right_child, split_dim, "
-        "split_value, checksum) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
-    auto update = db_->cached(
-        "UPDATE kd_nodes SET left_child = ?3, right_child = ?4, split_dim = ?5, split_value = ?6, "
-        "checksum = ?7 WHERE tree = ?1 AND node = ?2");
-    auto insert = db_->cached(
-        "INSERT INTO kd_nodes (tree, node, left_child, right_child, split_dim, split_value, "
-        "checksum) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
-    for (const KdNodeRecord& n : upserts) {
-      const std::int64_t sum = detail::kdNodeChecksum(n.tree, n.node, n.left_child, n.right_child,
-                                                      n.split_dim, n.split_value);
-      for (detail::Statement* s : {&*add, &*update, &*insert}) {
-        s->bind(1, std::int64_t(n.tree));
-        s->bind(2, n.node);
-        s->bind(3, n.left_child);
-        s->bind(4, n.right_child);
-        s->bind(5, std::int64_t(n.split_dim));
-        s->bind(6, n.split_value);
-        s->bind(7, sum);
-        s->run();
-        const bool changed = sqlite3_changes(db_->handle()) > 0;
-        if (s != &*update && changed) ++rows;
-        if (changed) break;
-      }
+  if (changes.upserts.empty()) return;
+  auto add = db.cached(
+      "INSERT OR IGNORE INTO kd_nodes (tree, node, left_child, right_child, split_dim, "
+      "split_value, checksum) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
+  auto update = db.cached(
+      "UPDATE kd_nodes SET left_child = ?3, right_child = ?4, split_dim = ?5, split_value = ?6, "
+      "checksum = ?7 WHERE tree = ?1 AND node = ?2");
+  auto insert = db.cached(
+      "INSERT INTO kd_nodes (tree, node, left_child, right_child, split_dim, split_value, "
+      "checksum) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
+  for (const KdNodeRecord& n : changes.upserts) {
+    const std::int64_t sum = detail::kdNodeChecksum(n.tree, n.node, n.left_child, n.right_child,
+                                                    n.split_dim, n.split_value);
+    for (detail::Statement* s : {&*add, &*update, &*insert}) {
+      s->bind(1, std::int64_t(n.tree));
+      s->bind(2, n.node);
+      s->bind(3, n.left_child);
+      s->bind(4, n.right_child);
+      s->bind(5, std::int64_t(n.split_dim));
+      s->bind(6, n.split_value);
+      s->bind(7, sum);
+      s->run();
+      const bool changed = sqlite3_changes(db.handle()) > 0;
+      if (s != &*update && changed) ++rows;
+      if (changed) break;
     }
   }
+}
+
+// Every kd_node_journal row in order; a row that fails its checksum or is not whole records
+// refuses the map.
+std::vector<std::pair<std::int64_t, detail::KdNodeChanges>> readKdNodeJournal(
+    detail::Database& db, const std::string& path) {
+  std::vector<std::pair<std::int64_t, detail::KdNodeChanges>> out;
+  auto s = db.cached("SELECT seq, changes, checksum FROM kd_node_journal ORDER BY seq");
+  while (s->step()) {
+    const std::int64_t seq = s->columnInt(0);
+    const std::vector<std::uint8_t> bytes = s->columnBlob(1);
+    detail::KdNodeChanges changes;
+    if (!detail::checksumMatches(*s, 2, detail::kdJournalChecksum(seq, bytes.data(), bytes.size())))
+      detail::refuseDamagedRow(path, "kd_node_journal", std::to_string(seq), "fails its checksum");
+    if (!detail::unpackKdNodeChanges(bytes.data(), bytes.size(), &changes))
+      detail::refuseDamagedRow(path, "kd_node_journal", std::to_string(seq),
+                               "is not whole node changes");
+    out.emplace_back(seq, std::move(changes));
+  }
+  return out;
+}
+
+}  // namespace
+
+void SqliteMapStore::foldKdNodeJournal(std::int64_t& rows) {
+  for (const auto& [seq, changes] : readKdNodeJournal(*db_, path_)) {
+    applyToKdNodes(*db_, changes, rows);
+    kd_journal_next_ = std::max(kd_journal_next_, seq + 1);
+  }
+  db_->cached("DELETE FROM kd_node_journal")->run();
+  kd_pending_->clear();
+  kd_journal_stale_ = false;
+}
+
+void SqliteMapStore::foldWholeKdNodeJournal() {
+  auto scope = writeScope();
+  if (db_->queryInt("SELECT count(*) FROM kd_node_journal") == 0) return;
+  std::int64_t rows = storedKdNodeRows();
+  foldKdNodeJournal(rows);
   putState(detail::kKdNodeRowsKey, std::to_string(rows));
   scope.commit();
 }
 
+void SqliteMapStore::foldKdNodeJournalAtClose() noexcept {
+  // Should this fail, the journal stays and the next open reads it.
+  if (read_only_ || !db_ || db_->inTransaction()) return;
+  try {
+    foldWholeKdNodeJournal();
+  } catch (...) {
+  }
+}
+
+void SqliteMapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
+                                  const std::vector<std::pair<int, std::int64_t>>& deletions,
+                                  bool replace_all) {
+  auto scope = writeScope();
+  if (db_->rollbacks() != kd_rollbacks_seen_) kd_journal_stale_ = true;
+  std::int64_t rows = 0;
+  if (replace_all) {
+    db_->cached("DELETE FROM kd_nodes")->run();
+    db_->cached("DELETE FROM kd_node_journal")->run();
+    kd_pending_->clear();
+    kd_journal_stale_ = false;
+    applyToKdNodes(*db_, {{}, upserts}, rows);
+  } else {
+    rows = storedKdNodeRows();
+    // The journal as committed is the truth: after an open or a rolled-back change, fold it all.
+    if (kd_journal_stale_) foldKdNodeJournal(rows);
+    const detail::KdNodeChanges changes{deletions, upserts};
+    const std::int64_t seq = kd_journal_next_++;
+    const std::vector<std::uint8_t> bytes = detail::packKdNodeChanges(changes);
+    auto add =
+        db_->cached("INSERT INTO kd_node_journal (seq, changes, checksum) VALUES (?1, ?2, ?3)");
+    add->bind(1, seq);
+    add->bindBlob(2, bytes.data(), bytes.size());
+    add->bind(3, std::int64_t{detail::kdJournalChecksum(seq, bytes.data(), bytes.size())});
+    add->run();
+    kd_pending_->record(seq, changes);
+    applyToKdNodes(*db_, kd_pending_->takeNextSlice(), rows);
+    auto drop = db_->cached("DELETE FROM kd_node_journal WHERE seq < ?1");
+    drop->bind(1, kd_pending_->oldestNeeded(kd_journal_next_));
+    drop->run();
+  }
+  putState(detail::kKdNodeRowsKey, std::to_string(rows));
+  scope.commit();
+  kd_rollbacks_seen_ = db_->rollbacks();
+}
+
 std::vector<KdNodeRecord> SqliteMapStore::loadKdNodes() const {
-  std::vector<KdNodeRecord> out;
+  // One snapshot for the table and the journal: a writer beside a reader folds and drops rows.
+  const ReadSnapshot snapshot(db_.get());
+  std::map<detail::KdNodeKey, KdNodeRecord> nodes;
   auto s = db_->cached(
       "SELECT tree, node, left_child, right_child, split_dim, split_value, checksum FROM kd_nodes "
       "ORDER BY tree, node");
@@ -156,14 +235,19 @@ std::vector<KdNodeRecord> SqliteMapStore::loadKdNodes() const {
           path_, "kd_nodes",
           "(tree " + std::to_string(s->columnInt(0)) + ", node " + std::to_string(n.node) + ")",
           "fails its checksum");
-    out.push_back(n);
+    nodes.emplace_hint(nodes.end(), detail::KdNodeKey{n.tree, n.node}, n);
   }
   const std::int64_t stored = storedKdNodeRows();
-  if (stored != static_cast<std::int64_t>(out.size()))
+  if (stored != static_cast<std::int64_t>(nodes.size()))
     throw StorageError(ErrorCode::kMapRefused,
-                       "map " + path_ + " damaged: kd_nodes holds " + std::to_string(out.size()) +
+                       "map " + path_ + " damaged: kd_nodes holds " + std::to_string(nodes.size()) +
                            " rows where the map recorded " + std::to_string(stored) +
                            " (rows were deleted or added); nothing was written");
+  for (const auto& [seq, changes] : readKdNodeJournal(*db_, path_))
+    detail::applyKdNodeChanges(changes, &nodes);
+  std::vector<KdNodeRecord> out;
+  out.reserve(nodes.size());
+  for (const auto& [key, n] : nodes) out.push_back(n);
   return out;
 }
 

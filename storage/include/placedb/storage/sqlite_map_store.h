@@ -17,6 +17,7 @@ class RefsDigest;
 namespace detail {
 class Database;
 class WalCheckpointer;
+class PendingKdNodes;
 }  // namespace detail
 
 class SqliteMapStore final : public MapStore {
@@ -130,7 +131,10 @@ class SqliteMapStore final : public MapStore {
   std::optional<std::string> getStateText(const std::string& key) const override;
   void deleteState(const std::string& key) override;
   // The vocabulary's kd-forest: upserts and deletes nodes by (tree, node); with replace_all the
-  // table is emptied first. loadKdNodes() returns every node, by tree and node.
+  // table is emptied first. loadKdNodes() returns every node, by tree and node. A frame's changes
+  // go to kd_node_journal and reach kd_nodes a slice at a time (schema 20,
+  // storage/src/sqlite/kd_node_journal.h); loadKdNodes() reads both, and a clean close folds the
+  // journal into kd_nodes.
   void writeKdNodes(const std::vector<KdNodeRecord>& upserts,
                     const std::vector<std::pair<int, std::int64_t>>& deletions,
                     bool replace_all) override;
@@ -190,12 +194,24 @@ class SqliteMapStore final : public MapStore {
   detail::WriteScope writeScope();
   // kd_nodes' row count as the map recorded it (engine_state); refuses the map when damaged.
   std::int64_t storedKdNodeRows() const;
+  // Applies the whole journal to kd_nodes (keeping `rows` its count) and empties it.
+  void foldKdNodeJournal(std::int64_t& rows);
+  // The same with the count stored: a cleanly ended session and a closing writer leave the whole
+  // forest in kd_nodes, for SQL readers.
+  void foldWholeKdNodeJournal();
+  void foldKdNodeJournalAtClose() noexcept;
 
   std::string path_;
   bool read_only_;
   int lock_fd_ = -1;  // holds the writer's advisory lock
   std::unique_ptr<detail::Database> db_;
   std::unique_ptr<detail::WalCheckpointer> checkpointer_;  // writers only
+  std::unique_ptr<detail::PendingKdNodes> kd_pending_;     // writers only
+  std::int64_t kd_journal_next_ = 1;                       // the next journal row's seq
+  // A rollback since the last change may have undone changes kd_pending_ holds: the next change
+  // folds the journal as committed first (as after opening).
+  std::uint64_t kd_rollbacks_seen_ = 0;
+  bool kd_journal_stale_ = true;
 };
 
 }  // namespace placedb::storage
