@@ -388,10 +388,14 @@ MapImpl::Verified MapImpl::verifyHypothesis(const FilterOutcome& outcome, const 
   }
 
   // Entries of locations that left working memory go; a candidate is always in WM, and the
-  // frame's own previous view (scene_extent.h) in STM or WM.
-  keypoint_cache_.retainIf([this](LocationId id) {
-    return tiers_->isIn(id, Tier::kWm) || tiers_->isIn(id, Tier::kStm);
-  });
+  // frame's own previous view (scene_extent.h) in STM or WM. An entry holds what the file holds,
+  // so one left behind changes no result, only memory: the whole-cache pass runs once the cache
+  // holds more entries than STM and WM have locations, which keeps it that small.
+  if (keypoint_cache_.size() + keypoint_cache_.positionsKept() >
+      tiers_->wmSize() + tiers_->stm().size())
+    keypoint_cache_.retainIf([this](LocationId id) {
+      return tiers_->isIn(id, Tier::kWm) || tiers_->isIn(id, Tier::kStm);
+    });
 
   GeometricView query;
   query.descriptors = features.descriptors;
