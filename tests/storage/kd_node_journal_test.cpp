@@ -221,8 +221,10 @@ TEST(KdNodeJournal, ADamagedJournalRowIsRefusedAndFoundByCheck) {
     RawDb raw(crashed);
     seq = raw.rows("SELECT max(seq) FROM kd_node_journal").at(0);
     // One byte of a split value, as a bad sector or a hand edit might change it.
-    raw.exec("UPDATE kd_node_journal SET changes = CAST(substr(changes, 1, 30) || x'7f' || "
-             "substr(changes, 32) AS BLOB) WHERE seq = " + seq);
+    raw.exec(
+        "UPDATE kd_node_journal SET changes = CAST(substr(changes, 1, 30) || x'7f' || "
+        "substr(changes, 32) AS BLOB) WHERE seq = " +
+        seq);
   }
   try {
     SqliteMapStore opened(crashed, OpenMode::kReadOnly);
