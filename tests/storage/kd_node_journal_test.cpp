@@ -166,6 +166,24 @@ TEST(KdNodeJournal, ReadersCrashesAndCloseSeeTheForestWritten) {
   EXPECT_TRUE(checkMap(path).ok());
 }
 
+TEST(KdNodeJournal, ACleanEndOfSessionFoldsTheJournal) {
+  const auto dir = placedb::testing::scratchDir("KdNodeJournalEndSession");
+  const std::string path = (dir / "map.placedb").string();
+  Forest model;
+  FrameMaker maker(6);
+  SqliteMapStore store(path, OpenMode::kReadWrite);
+  const std::int64_t first = store.beginSession("test", {}, "test");
+  writeFrames(store, maker, model, 100);
+  store.endSession(first, false);  // a writer that stopped on an error: nothing more is written
+  EXPECT_GT(count(path, "kd_node_journal"), 0);
+  const std::int64_t second = store.beginSession("test", {}, "test");
+  writeFrames(store, maker, model, 100);
+  store.endSession(second, true);
+  EXPECT_EQ(count(path, "kd_node_journal"), 0);
+  EXPECT_EQ(count(path, "kd_nodes"), static_cast<std::int64_t>(model.size()));
+  expectForest(model, store.loadKdNodes());
+}
+
 TEST(KdNodeJournal, ARolledBackFrameLeavesTheCommittedForest) {
   const auto dir = placedb::testing::scratchDir("KdNodeJournalRollback");
   const std::string path = (dir / "map.placedb").string();
