@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <random>
+#include <set>
 
 #include <gtest/gtest.h>
 
@@ -122,6 +123,46 @@ TEST(KdNodeJournal, ChangesPackAndUnpackExactly) {
   const std::vector<std::uint8_t> deletion = detail::packKdNodeChanges({{{0, 5}}, {}});
   swapped.insert(swapped.end(), deletion.begin(), deletion.end());
   EXPECT_FALSE(detail::unpackKdNodeChanges(swapped.data(), swapped.size(), &ignored));
+}
+
+TEST(KdNodeJournal, EveryPendingChangeIsFoldedWithinOneSweep) {
+  // The journal keeps a row only while a change in it is pending, so the fold must reach every
+  // node within one sweep, whatever its id: a far one (2^40) too, and quickly.
+  detail::PendingKdNodes pending;
+  Forest latest;
+  std::mt19937 rng(7);
+  std::int64_t seq = 1;
+  for (; seq <= 40; ++seq) {
+    KdNodeChanges c;
+    for (int i = 0; i < 30; ++i) {
+      KdNodeRecord n;
+      n.tree = static_cast<int>(rng() % 3);
+      n.node = static_cast<std::int64_t>(rng() % 5000);
+      n.split_value = static_cast<double>(seq);
+      c.upserts.push_back(n);
+    }
+    if (seq == 20) c.deletions.push_back({1, std::int64_t{1} << 40});
+    if (seq == 10) c.upserts.push_back({1, std::int64_t{1} << 40, 1, 2, 3, 0.5});
+    pending.record(seq, c);
+    detail::applyKdNodeChanges(c, &latest);
+  }
+  EXPECT_EQ(pending.oldestNeeded(seq), 1);
+  Forest folded;
+  std::set<KdNodeKey> deleted;
+  for (int call = 0; call <= detail::PendingKdNodes::kSweepFrames && !pending.empty(); ++call) {
+    const KdNodeChanges slice = pending.takeNextSlice();
+    for (const KdNodeKey& key : slice.deletions) EXPECT_TRUE(deleted.insert(key).second);
+    for (const KdNodeRecord& n : slice.upserts)
+      EXPECT_TRUE(folded.emplace(KdNodeKey{n.tree, n.node}, n).second) << "taken twice";
+  }
+  EXPECT_TRUE(pending.empty());
+  EXPECT_EQ(pending.oldestNeeded(seq), seq);
+  EXPECT_EQ(deleted, (std::set<KdNodeKey>{{1, std::int64_t{1} << 40}}));
+  expectForest(latest, [&] {
+    std::vector<KdNodeRecord> out;
+    for (const auto& [key, n] : folded) out.push_back(n);
+    return out;
+  }());
 }
 
 TEST(KdNodeJournal, ReadersCrashesAndCloseSeeTheForestWritten) {

@@ -108,11 +108,23 @@ KdNodeChanges PendingKdNodes::takeNextSlice() {
   const std::int64_t width = std::max<std::int64_t>(1, (blocks + kSweepFrames - 1) / kSweepFrames);
   std::vector<Change> taken;
   for (auto& [tree, by_block] : blocks_) {
-    for (std::int64_t b = cursor_; b < cursor_ + width; ++b) {
-      auto it = by_block.find(b);
-      if (it == by_block.end()) continue;
+    // Whichever is fewer: the slice's blocks, or the blocks holding pending changes.
+    if (static_cast<std::size_t>(width) <= by_block.size()) {
+      for (std::int64_t b = cursor_; b < cursor_ + width; ++b) {
+        auto it = by_block.find(b);
+        if (it == by_block.end()) continue;
+        taken.insert(taken.end(), it->second.begin(), it->second.end());
+        by_block.erase(it);
+      }
+      continue;
+    }
+    for (auto it = by_block.begin(); it != by_block.end();) {
+      if (it->first < cursor_ || it->first >= cursor_ + width) {
+        ++it;
+        continue;
+      }
       taken.insert(taken.end(), it->second.begin(), it->second.end());
-      by_block.erase(it);
+      it = by_block.erase(it);
     }
   }
   cursor_ = cursor_ + width >= blocks ? 0 : cursor_ + width;
