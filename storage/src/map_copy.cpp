@@ -100,29 +100,20 @@ CellValue integer(std::int64_t v) {
   return c;
 }
 
-// The source's forest as its store reads it: a file's kd_nodes with its journal applied (schema
-// 20), so the copy's kd_nodes is the whole forest and its row count the copy's own.
-std::int64_t copyKdNodes(const MapStore& from, MapStore& to, const TableColumns& t) {
-  std::vector<TableRow> rows;
-  std::int64_t written = 0;
+// A table's rows as the copy writes them. kd_nodes is the source's forest as its store reads it:
+// a file's kd_nodes with its journal applied (schema 20), so the copy's is the whole forest.
+void readRows(const MapStore& from, const TableColumns& t,
+              const std::function<void(const TableRow&)>& row) {
+  if (t.table != "kd_nodes") return from.readTable(t, row);
   for (const KdNodeRecord& n : from.loadKdNodes()) {
     CellValue value;
     value.kind = CellValue::Kind::kReal;
     value.real = n.split_value;
-    rows.push_back({integer(n.tree), integer(n.node), integer(n.left_child), integer(n.right_child),
-                    integer(n.split_dim), value,
-                    integer(detail::kdNodeChecksum(n.tree, n.node, n.left_child, n.right_child,
-                                                   n.split_dim, n.split_value))});
-    if (rows.size() == kBatch) {
-      to.writeRows(t, rows);
-      written += static_cast<std::int64_t>(rows.size());
-      rows.clear();
-    }
+    row({integer(n.tree), integer(n.node), integer(n.left_child), integer(n.right_child),
+         integer(n.split_dim), value,
+         integer(detail::kdNodeChecksum(n.tree, n.node, n.left_child, n.right_child, n.split_dim,
+                                        n.split_value))});
   }
-  if (!rows.empty()) to.writeRows(t, rows);
-  written += static_cast<std::int64_t>(rows.size());
-  to.putState(detail::kKdNodeRowsKey, std::to_string(written));
-  return written;
 }
 
 }  // namespace
@@ -138,17 +129,12 @@ void copyMap(const MapStore& from, MapStore& to,
   const ReadSnapshot snapshot = from.readSnapshot();
   Transaction tx = to.begin();
   for (const TableColumns& t : mapTables()) {
-    // A new map holds its own resume state rows (the kd_nodes row count): the source's replace
-    // them.
+    // A new map holds its own resume state rows (the kd_nodes row count): the copy's count
+    // replaces the source's, which a file's journal may leave behind its forest.
     if (t.table == "engine_state") to.deleteState(detail::kKdNodeRowsKey);
-    if (t.table == "kd_nodes") {
-      const std::int64_t rows = copyKdNodes(from, to, t);
-      if (progress) progress({t.table, rows});
-      continue;
-    }
     std::vector<TableRow> batch;
     std::int64_t rows = 0;
-    from.readTable(t, [&](const TableRow& row) {
+    readRows(from, t, [&](const TableRow& row) {
       batch.push_back(row);
       if (batch.size() == kBatch) {
         to.writeRows(t, batch);
@@ -159,6 +145,7 @@ void copyMap(const MapStore& from, MapStore& to,
     });
     if (!batch.empty()) to.writeRows(t, batch);
     rows += static_cast<std::int64_t>(batch.size());
+    if (t.table == "kd_nodes") to.putState(detail::kKdNodeRowsKey, std::to_string(rows));
     if (progress) progress({t.table, rows});
   }
   tx.commit();

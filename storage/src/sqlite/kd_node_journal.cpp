@@ -2,6 +2,10 @@
 
 #include <algorithm>
 #include <cstring>
+#include <iterator>
+
+#include "sqlite/database.h"
+#include "sqlite/sqlite_checksums.h"
 
 namespace placedb::storage::detail {
 
@@ -77,6 +81,14 @@ bool unpackKdNodeChanges(const std::uint8_t* data, std::size_t size, KdNodeChang
   return true;
 }
 
+const char* kdNodeJournalRowProblem(const Statement& row, KdNodeChanges* out) {
+  const auto [data, size] = row.columnBlobView(1);
+  if (!checksumMatches(row, 2, kdJournalChecksum(row.columnInt(0), data, size)))
+    return "fails its checksum";
+  if (!unpackKdNodeChanges(data, size, out)) return "is not whole node changes";
+  return nullptr;
+}
+
 void applyKdNodeChanges(const KdNodeChanges& changes, std::map<KdNodeKey, KdNodeRecord>* nodes) {
   for (const KdNodeKey& key : changes.deletions) nodes->erase(key);
   for (const KdNodeRecord& n : changes.upserts) (*nodes)[{n.tree, n.node}] = n;
@@ -108,24 +120,18 @@ KdNodeChanges PendingKdNodes::takeNextSlice() {
   const std::int64_t width = std::max<std::int64_t>(1, (blocks + kSweepFrames - 1) / kSweepFrames);
   std::vector<Change> taken;
   for (auto& [tree, by_block] : blocks_) {
+    auto take = [&](auto it) {
+      taken.insert(taken.end(), it->second.begin(), it->second.end());
+      return by_block.erase(it);
+    };
     // Whichever is fewer: the slice's blocks, or the blocks holding pending changes.
     if (static_cast<std::size_t>(width) <= by_block.size()) {
-      for (std::int64_t b = cursor_; b < cursor_ + width; ++b) {
-        auto it = by_block.find(b);
-        if (it == by_block.end()) continue;
-        taken.insert(taken.end(), it->second.begin(), it->second.end());
-        by_block.erase(it);
-      }
+      for (std::int64_t b = cursor_; b < cursor_ + width; ++b)
+        if (auto it = by_block.find(b); it != by_block.end()) take(it);
       continue;
     }
-    for (auto it = by_block.begin(); it != by_block.end();) {
-      if (it->first < cursor_ || it->first >= cursor_ + width) {
-        ++it;
-        continue;
-      }
-      taken.insert(taken.end(), it->second.begin(), it->second.end());
-      it = by_block.erase(it);
-    }
+    for (auto it = by_block.begin(); it != by_block.end();)
+      it = it->first >= cursor_ && it->first < cursor_ + width ? take(it) : std::next(it);
   }
   cursor_ = cursor_ + width >= blocks ? 0 : cursor_ + width;
   // Each node's latest change, in key order: a stable sort keeps a node's changes in arrival

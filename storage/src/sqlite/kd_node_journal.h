@@ -39,6 +39,12 @@ std::vector<std::uint8_t> packKdNodeChanges(const KdNodeChanges& changes);
 // False when the bytes are not whole records of that form.
 bool unpackKdNodeChanges(const std::uint8_t* data, std::size_t size, KdNodeChanges* out);
 
+class Statement;
+
+// A kd_node_journal row as selected (seq, changes, checksum): its changes into `out`, or what is
+// wrong with it, for a refusal or a check's finding; nullptr when nothing is.
+const char* kdNodeJournalRowProblem(const Statement& row, KdNodeChanges* out);
+
 // Applies `changes` to a forest held by key, in their order.
 void applyKdNodeChanges(const KdNodeChanges& changes, std::map<KdNodeKey, KdNodeRecord>* nodes);
 

@@ -155,13 +155,9 @@ class Checker {
   void kdNodeJournal() {
     rows("kd_node_journal", "SELECT seq, changes, checksum FROM kd_node_journal",
          [&](const Statement& s) {
-           const std::int64_t seq = s.columnInt(0);
-           const auto [data, size] = s.columnBlobView(1);
            detail::KdNodeChanges changes;
-           if (!detail::checksumMatches(s, 2, detail::kdJournalChecksum(seq, data, size)))
-             find("kd_node_journal", std::to_string(seq), "fails its checksum");
-           else if (!detail::unpackKdNodeChanges(data, size, &changes))
-             find("kd_node_journal", std::to_string(seq), "is not whole node changes");
+           if (const char* problem = detail::kdNodeJournalRowProblem(s, &changes))
+             find("kd_node_journal", std::to_string(s.columnInt(0)), problem);
          });
   }
 

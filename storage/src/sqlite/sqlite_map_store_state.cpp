@@ -133,15 +133,10 @@ std::vector<std::pair<std::int64_t, detail::KdNodeChanges>> readKdNodeJournal(
   std::vector<std::pair<std::int64_t, detail::KdNodeChanges>> out;
   auto s = db.cached("SELECT seq, changes, checksum FROM kd_node_journal ORDER BY seq");
   while (s->step()) {
-    const std::int64_t seq = s->columnInt(0);
-    const std::vector<std::uint8_t> bytes = s->columnBlob(1);
     detail::KdNodeChanges changes;
-    if (!detail::checksumMatches(*s, 2, detail::kdJournalChecksum(seq, bytes.data(), bytes.size())))
-      detail::refuseDamagedRow(path, "kd_node_journal", std::to_string(seq), "fails its checksum");
-    if (!detail::unpackKdNodeChanges(bytes.data(), bytes.size(), &changes))
-      detail::refuseDamagedRow(path, "kd_node_journal", std::to_string(seq),
-                               "is not whole node changes");
-    out.emplace_back(seq, std::move(changes));
+    if (const char* problem = detail::kdNodeJournalRowProblem(*s, &changes))
+      detail::refuseDamagedRow(path, "kd_node_journal", std::to_string(s->columnInt(0)), problem);
+    out.emplace_back(s->columnInt(0), std::move(changes));
   }
   return out;
 }
@@ -215,7 +210,7 @@ void SqliteMapStore::writeKdNodes(const std::vector<KdNodeRecord>& upserts,
 std::vector<KdNodeRecord> SqliteMapStore::loadKdNodes() const {
   // One snapshot for the table and the journal: a writer beside a reader folds and drops rows.
   const ReadSnapshot snapshot(db_.get());
-  std::map<detail::KdNodeKey, KdNodeRecord> nodes;
+  std::vector<KdNodeRecord> nodes;
   auto s = db_->cached(
       "SELECT tree, node, left_child, right_child, split_dim, split_value, checksum FROM kd_nodes "
       "ORDER BY tree, node");
@@ -235,7 +230,7 @@ std::vector<KdNodeRecord> SqliteMapStore::loadKdNodes() const {
           path_, "kd_nodes",
           "(tree " + std::to_string(s->columnInt(0)) + ", node " + std::to_string(n.node) + ")",
           "fails its checksum");
-    nodes.emplace_hint(nodes.end(), detail::KdNodeKey{n.tree, n.node}, n);
+    nodes.push_back(n);
   }
   const std::int64_t stored = storedKdNodeRows();
   if (stored != static_cast<std::int64_t>(nodes.size()))
@@ -243,12 +238,15 @@ std::vector<KdNodeRecord> SqliteMapStore::loadKdNodes() const {
                        "map " + path_ + " damaged: kd_nodes holds " + std::to_string(nodes.size()) +
                            " rows where the map recorded " + std::to_string(stored) +
                            " (rows were deleted or added); nothing was written");
-  for (const auto& [seq, changes] : readKdNodeJournal(*db_, path_))
-    detail::applyKdNodeChanges(changes, &nodes);
-  std::vector<KdNodeRecord> out;
-  out.reserve(nodes.size());
-  for (const auto& [key, n] : nodes) out.push_back(n);
-  return out;
+  const auto journal = readKdNodeJournal(*db_, path_);
+  if (journal.empty()) return nodes;  // a map closed cleanly
+  std::map<detail::KdNodeKey, KdNodeRecord> forest;
+  for (const KdNodeRecord& n : nodes)
+    forest.emplace_hint(forest.end(), detail::KdNodeKey{n.tree, n.node}, n);
+  for (const auto& [seq, changes] : journal) detail::applyKdNodeChanges(changes, &forest);
+  nodes.clear();
+  for (const auto& [key, n] : forest) nodes.push_back(n);
+  return nodes;
 }
 
 void SqliteMapStore::putPosterior(const std::vector<std::pair<std::int64_t, double>>& posterior) {
