@@ -82,6 +82,10 @@ def run_to_end(binary, uri, source, log, rng, server, kills):
                 p.send_signal(signal.SIGKILL)
                 p.communicate()
                 killed += 1
+                # A kill that lands after B ended its session (the summary, the close) leaves
+                # nothing to resume: a run now would begin a new session, and the log refuses it.
+                if session_ended(uri, 2):
+                    return killed, lost
                 continue
         err = p.communicate()[1]
         if p.returncode == 5 and "busy" in err:
@@ -91,6 +95,11 @@ def run_to_end(binary, uri, source, log, rng, server, kills):
         return killed, lost
     check(False, "B did not finish")
     return killed, lost
+
+
+def session_ended(uri, session):
+    rows = fs.PgServer.sql(uri, f"SELECT ended_at IS NOT NULL FROM sessions WHERE id = {session}")
+    return bool(rows) and rows[0][0] == "t"
 
 
 def main():
