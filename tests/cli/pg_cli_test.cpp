@@ -434,6 +434,58 @@ TEST_F(PgCli, RobotsCannotTouchOtherRobotsPlacesNorLockTheFleetOut) {
   EXPECT_EQ(again.exit_code, 0) << describe(again);
 }
 
+// The guards are keyed to the map's owner (migrations/pg/0021): its writes skip them before they
+// run. Handed to another owner (REASSIGN OWNED), the map's check names each guard still keyed to
+// the former one; the new owner's first `map` keys them again, and the former owner, now a robot
+// granted everything, is refused on the new owner's rows as any robot is.
+TEST_F(PgCli, GuardsFollowTheMapToItsNextOwner) {
+  const std::string list = lip6List(dir_, "lip6_old.txt", 0, 4);
+  if (list.empty()) GTEST_SKIP() << "lip6_outdoor absent under " << datasetsDir();
+  const std::string uri = database("");
+  const std::string db = pgTestDatabaseName();
+  const std::string host = uri.substr(uri.find("host="), uri.find('&') - uri.find("host="));
+  const auto as = [&](const std::string& role) {
+    return "postgresql://" + role + ":owner-secret@/" + db + "?" + host;
+  };
+  for (const std::string role : {"cli_owner_old", "cli_owner_new"}) {
+    pgAdmin(server_, "DROP ROLE IF EXISTS " + role);
+    pgAdmin(server_, "CREATE ROLE " + role + " LOGIN PASSWORD 'owner-secret'");
+  }
+  pgAdmin(uri, "GRANT ALL ON SCHEMA public TO cli_owner_old, cli_owner_new");
+  auto first = placedb({"map", as("cli_owner_old"), list, "-q"}, dir_);
+  ASSERT_EQ(first.exit_code, 0) << describe(first);
+
+  pgAdmin(uri, "REASSIGN OWNED BY cli_owner_old TO cli_owner_new");
+  ASSERT_NO_FATAL_FAILURE(grantRobot(uri, db, "cli_owner_old"));
+  pgAdmin(uri, "GRANT ALL ON ALL TABLES IN SCHEMA public TO cli_owner_old");
+  auto stale = placedb({"check", uri}, dir_);
+  EXPECT_NE(stale.exit_code, 0) << describe(stale);
+  const std::string said = stale.out + stale.err;
+  EXPECT_NE(said.find("keyed to another role than the map's owner cli_owner_new"),
+            std::string::npos)
+      << describe(stale);
+
+  auto second =
+      placedb({"map", as("cli_owner_new"), lip6List(dir_, "lip6_new.txt", 300, 4), "-q"}, dir_);
+  ASSERT_EQ(second.exit_code, 0) << describe(second);
+  auto keyed = placedb({"check", uri, "-q"}, dir_);
+  EXPECT_EQ(keyed.exit_code, 0) << describe(keyed);
+
+  PGconn* conn = PQconnectdb(as("cli_owner_old").c_str());
+  ASSERT_EQ(PQstatus(conn), CONNECTION_OK) << PQerrorMessage(conn);
+  for (const std::string sql :
+       {"UPDATE locations SET weight = weight + 1 WHERE session_id = 2",
+        "DELETE FROM word_refs WHERE location_id IN (SELECT id FROM locations l WHERE "
+        "l.session_id = 2)",
+        "UPDATE placedb_meta SET value = '99' WHERE key = 'schema_version'"}) {
+    PGresult* r = PQexec(conn, sql.c_str());
+    const char* state = PQresultErrorField(r, PG_DIAG_SQLSTATE);
+    EXPECT_STREQ(state ? state : "", "42501") << sql << ": " << PQresultErrorMessage(r);
+    PQclear(r);
+  }
+  PQfinish(conn);
+}
+
 // File -> server -> file: the same info, and a further session mapped on each copy decides as
 // on the original.
 TEST_F(PgCli, CopyRoundTripKeepsTheMapAndItsDecisions) {

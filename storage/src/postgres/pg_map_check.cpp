@@ -162,6 +162,18 @@ class PgChecker {
            "holds a probability outside [0, 1]");
   }
 
+  // Guards keyed to a role other than the map's owner (migrations/pg/0021): members of that role
+  // write unchecked until the owner opens the map for writing, which keys them again.
+  void guardKeys() {
+    const auto stale = db_.run(
+        "SELECT g.rel::text, g.name, pg_get_userbyid(c.relowner) FROM placedb_unkeyed_guards() g, "
+        "pg_class c WHERE c.oid = 'placedb_meta'::regclass");
+    for (int i = 0; i < stale.rows(); ++i)
+      find(stale.text(i, 0), stale.text(i, 1),
+           "the guard is keyed to another role than the map's owner " + stale.text(i, 2) +
+               ": open the map for writing as " + stale.text(i, 2) + " to key it again");
+  }
+
   void values() {
     if (options_.progress) options_.progress({"values", 0, 0});
     const auto weights = db_.run("SELECT id FROM locations WHERE weight < 0");
@@ -215,6 +227,7 @@ CheckReport checkPgMap(const std::string& uri, const CheckOptions& options) {
   try {
     checker.checksums();
     checker.sideSessions();
+    checker.guardKeys();
     checker.values();
     // What every location and session must hold (schema 15), and every location's references
     // against their digest: the store's own checks, the first damaged row of each.
