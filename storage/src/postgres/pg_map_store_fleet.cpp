@@ -167,12 +167,15 @@ std::vector<SharedPlace> PgMapStore::placesAfter(
     sessions.push_back(session);
     marks.push_back(mark);
   }
-  // One index range per session (locations_by_session), empty when it stored nothing new.
+  // One index range per session (locations_by_session), empty when it stored nothing new. The
+  // mark comes in as a joined row and OFFSET 0 keeps the subquery a per-session range: pulled up
+  // into the join, its bound (a subquery on the marks) was tested on every location of the map,
+  // each frame.
   const auto r = db_->run(
       "SELECT l.id, l.session_id, l.weight, p.code, p.checksum FROM sessions s "
+      "LEFT JOIN unnest($2::int8[], $3::int8[]) AS n(s, m) ON n.s = s.id "
       "CROSS JOIN LATERAL (SELECT id, session_id, weight FROM locations WHERE session_id = s.id "
-      "  AND id > coalesce((SELECT n.m FROM unnest($2::int8[], $3::int8[]) AS n(s, m) "
-      "  WHERE n.s = s.id), 0)) l "
+      "  AND id > coalesce(n.m, 0) OFFSET 0) l "
       "LEFT JOIN place_codes p ON p.location_id = l.id WHERE s.id <> $1 ORDER BY l.id",
       detail::PgParams().add(session_id).addArray(sessions).addArray(marks));
   std::vector<SharedPlace> out;
