@@ -169,8 +169,8 @@ class PgChecker {
         "SELECT g.rel::text, g.name, pg_get_userbyid(c.relowner) FROM placedb_unkeyed_guards() g, "
         "pg_class c WHERE c.oid = 'placedb_meta'::regclass");
     for (int i = 0; i < stale.rows(); ++i)
-      find(stale.text(i, 0), stale.text(i, 1),
-           "the guard is keyed to another role than the map's owner " + stale.text(i, 2) +
+      find("triggers", stale.text(i, 1) + " on " + stale.text(i, 0),
+           "is keyed to another role than the map's owner " + stale.text(i, 2) +
                ": open the map for writing as " + stale.text(i, 2) + " to key it again");
   }
 
