@@ -329,5 +329,5 @@ INSERT INTO engine_state (key, value, checksum) VALUES ('storage.kd_nodes.rows',
 
 -- 0x504C4442 = 'PLDB' marks a placedb map; user_version is the schema version.
 PRAGMA application_id = 1347175490;
-PRAGMA user_version = 22;
+PRAGMA user_version = 23;
 COMMIT;

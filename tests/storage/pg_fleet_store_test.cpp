@@ -122,6 +122,43 @@ TEST(PgFleetStore, SideSessionCopiesTheMainLineAndKeepsItsMemoryApart) {
   EXPECT_EQ(main->sessionMemory(s1), SessionMemory::kMainLine);
 }
 
+// Schema 23 dropped the keys of a side session's own memory on its session (migrations/pg/0023
+// says why): check must find the rows of a session that was deleted. The session goes with the
+// server's key triggers off, as only the owner can (other tables still name it).
+TEST(PgFleetStore, CheckFindsSideMemoryWhoseSessionWasDeleted) {
+  PLACEDB_REQUIRE_PG_SERVER(server);
+  const std::string uri = freshPgDatabase(server, pgTestDatabaseName());
+  {
+    auto main = openMapStore(uri, OpenMode::kReadWrite);
+    const auto s1 = main->beginSession("a", {}, "test");
+    for (int i = 0; i < 3; ++i) testing::writeFrame(*main, s1, i);
+    main->writeKdNodes({{0, 0, 1, 2, 5, 0.5}}, {}, false);
+    auto side = sideWriter(uri);
+    Transaction tx = side->begin();
+    EXPECT_EQ(side->beginSideSession("b", {}, "test"), 2);
+    tx.commit();
+  }
+  EXPECT_TRUE(checkMap(uri).ok());
+  EXPECT_EQ(placedb::testing::pgRows(
+                uri,
+                "SELECT count(*) FROM pg_constraint WHERE contype = 'f' AND confrelid = "
+                "'sessions'::regclass AND conrelid IN ('session_state'::regclass, "
+                "'session_kd_nodes'::regclass, 'session_memory'::regclass)"),
+            std::vector<std::string>{"0"});
+  placedb::testing::pgAdmin(
+      uri, "SET session_replication_role = replica; DELETE FROM sessions WHERE id = 2");
+  std::vector<std::string> side_tables;
+  for (const auto& f : checkMap(uri).findings)
+    if (f.table.rfind("session_", 0) == 0) {
+      side_tables.push_back(f.table);
+      EXPECT_EQ(f.row, "session 2");
+      EXPECT_NE(f.problem.find("rows name session 2, which is missing"), std::string::npos)
+          << f.problem;
+    }
+  EXPECT_EQ(side_tables,
+            (std::vector<std::string>{"session_kd_nodes", "session_memory", "session_state"}));
+}
+
 TEST(PgFleetStore, IdBlocksAreDisjointAndARollbackGivesItsBlockBack) {
   PLACEDB_REQUIRE_PG_SERVER(server);
   const std::string uri = freshPgDatabase(server, pgTestDatabaseName());

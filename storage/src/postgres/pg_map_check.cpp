@@ -153,6 +153,16 @@ class PgChecker {
       if (text != std::to_string(counted[session]))
         find("session_kd_nodes", "session " + std::to_string(session),
              "holds " + std::to_string(counted[session]) + " rows where the map recorded " + text);
+    // Their keys on sessions went in schema 23 (migrations/pg/0023).
+    const auto orphans = db_.run(
+        "SELECT t, session_id, count(*) FROM (SELECT 'session_state' AS t, session_id FROM "
+        "session_state UNION ALL SELECT 'session_kd_nodes', session_id FROM session_kd_nodes "
+        "UNION ALL SELECT 'session_memory', session_id FROM session_memory) r WHERE NOT EXISTS "
+        "(SELECT 1 FROM sessions s WHERE s.id = r.session_id) GROUP BY 1, 2 ORDER BY 1, 2");
+    for (int i = 0; i < orphans.rows(); ++i)
+      find(orphans.text(i, 0), "session " + std::to_string(orphans.integer(i, 1)),
+           std::to_string(orphans.integer(i, 2)) + " rows name session " +
+               std::to_string(orphans.integer(i, 1)) + ", which is missing");
     const auto posterior = db_.run(
         "SELECT session_id, location_id FROM session_posterior WHERE NOT (probability >= 0 AND "
         "probability <= 1)");
