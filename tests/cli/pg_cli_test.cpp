@@ -447,6 +447,7 @@ TEST_F(PgCli, GuardsFollowTheMapToItsNextOwner) {
   const auto as = [&](const std::string& role) {
     return "postgresql://" + role + ":owner-secret@/" + db + "?" + host;
   };
+  pgAdmin(server_, "DROP ROLE IF EXISTS cli_owner_renamed");
   for (const std::string role : {"cli_owner_old", "cli_owner_new"}) {
     pgAdmin(server_, "DROP ROLE IF EXISTS " + role);
     pgAdmin(server_, "CREATE ROLE " + role + " LOGIN PASSWORD 'owner-secret'");
@@ -484,6 +485,22 @@ TEST_F(PgCli, GuardsFollowTheMapToItsNextOwner) {
     PQclear(r);
   }
   PQfinish(conn);
+
+  // Renamed, the owner leaves guards keyed to a name no role has: another writer is refused at
+  // its open, told what fixes it, until the owner's next `map` keys them again.
+  pgAdmin(server_, "ALTER ROLE cli_owner_new RENAME TO cli_owner_renamed");
+  const std::string robot_list = lip6List(dir_, "lip6_robot.txt", 600, 3);
+  auto refused = placedb({"map", as("cli_owner_old"), robot_list, "-q"}, dir_);
+  EXPECT_EQ(refused.exit_code, 4) << describe(refused);
+  EXPECT_NE(refused.err.find("keyed to role cli_owner_new, which no longer exists; the map's "
+                             "owner cli_owner_renamed keys them again"),
+            std::string::npos)
+      << describe(refused);
+  auto rekeyed = placedb(
+      {"map", as("cli_owner_renamed"), lip6List(dir_, "lip6_owner.txt", 700, 3), "-q"}, dir_);
+  ASSERT_EQ(rekeyed.exit_code, 0) << describe(rekeyed);
+  auto robot = placedb({"map", as("cli_owner_old"), robot_list, "-q"}, dir_);
+  EXPECT_EQ(robot.exit_code, 0) << describe(robot);
 }
 
 // File -> server -> file: the same info, and a further session mapped on each copy decides as

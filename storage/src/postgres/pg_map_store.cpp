@@ -157,6 +157,7 @@ void PgMapStore::migrate() {
     // Guards keyed to a former owner are keyed again by the owner's first writer (pg/0021); a
     // confined writer changes nothing.
     db_->run("SELECT placedb_key_guards()");
+    refuseGuardsOfMissingRole();
     if (found == 0) {
       // A new map's forest has no nodes; the count is checked against the table when it loads
       // (SQLite's schema-8 migration writes the same row).

@@ -195,6 +195,7 @@ class PgMapStore final : public MapStore {
   void requireRefsDigests(const std::map<std::int64_t, std::vector<WordRef>>& refs) const;
   // Fills held, refs_digest and the new sums of a map upgraded to schema 15.
   void fillLocationRows();
+  void refuseGuardsOfMissingRole();
   // Locations this store inserted and wrote no reference of yet: their first references need no
   // read of earlier ones for the digest.
   std::set<std::int64_t> fresh_locations_;

@@ -9,6 +9,8 @@
 //   only those: the side* methods below, which the MapStore methods call when side_session_ is set.
 // - Ids come from blocks reserved in id_blocks within the frame's transaction: a frame that rolls
 //   back gives its block back, so a lone writer numbers rows exactly as a file does.
+// - Robots' guards (schema 15, keyed to the owner in schema 21): a writer other than the owner
+//   is refused at its open when they name a role that no longer exists.
 #include <cstring>
 
 #include "postgres/pg_map_store.h"
@@ -192,6 +194,26 @@ std::vector<SharedPlace> PgMapStore::placesAfter(
     out.push_back(std::move(place));
   }
   return out;
+}
+
+// ---- Robots' guards ----
+
+void PgMapStore::refuseGuardsOfMissingRole() {
+  // Guards still keyed to a role that no longer exists (the owner renamed or dropped, the owner's
+  // writer not yet back) fail every write of another writer with the server's own "role does not
+  // exist": said here, before any write, with what fixes it. The role is read back from the
+  // guard's condition, where the server prints it as a literal (quotes doubled).
+  const auto r = db_->run(
+      "SELECT k.role, pg_get_userbyid(c.relowner) FROM (SELECT DISTINCT replace(substring(def "
+      "FROM $re$pg_has_role\\(CURRENT_USER, '((?:[^']|'')*)'::name$re$), '''''', '''') AS role "
+      "FROM placedb_unkeyed_guards()) k, pg_class c WHERE c.oid = 'placedb_meta'::regclass AND "
+      "k.role IS NOT NULL AND NOT EXISTS (SELECT 1 FROM pg_roles o WHERE o.rolname = k.role) "
+      "ORDER BY 1 LIMIT 1");
+  if (r.rows() == 0) return;
+  throw StorageError(ErrorCode::kMapRefused,
+                     "map " + label_ + " refused: its guards are keyed to role " + r.text(0, 0) +
+                         ", which no longer exists; the map's owner " + r.text(0, 1) +
+                         " keys them again by opening it for writing (placedb map)");
 }
 
 // ---- A side session's own memory ----
