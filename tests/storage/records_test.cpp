@@ -253,6 +253,16 @@ TEST_P(Records, BulkDescriptorAndSignatureLoads) {
     EXPECT_EQ(created[i], ids[i] % 2 ? 1 : -1);
   }
   store_->loadFloatDescriptors({}, kDim, nullptr, nullptr);  // nothing asked, nothing touched
+  // Ids that fill most of their range (a server reads them as the range and skips the others).
+  const std::vector<std::int64_t> dense = {2, 3, 4, 6, 7, 8};
+  std::vector<float> dense_rows(dense.size() * kDim, -1.f);
+  std::vector<std::int64_t> dense_created(dense.size(), 99);
+  store_->loadFloatDescriptors(dense, kDim, dense_rows.data(), dense_created.data());
+  for (std::size_t i = 0; i < dense.size(); ++i) {
+    SCOPED_TRACE("word " + std::to_string(dense[i]) + " of a dense range");
+    for (int k = 0; k < kDim; ++k) EXPECT_EQ(dense_rows[i * kDim + k], value(dense[i], k));
+    EXPECT_EQ(dense_created[i], dense[i] % 2 ? 1 : -1);
+  }
 
   auto code = [&](const std::vector<std::int64_t>& asked) {
     std::vector<float> out(asked.size() * kDim);
@@ -267,6 +277,7 @@ TEST_P(Records, BulkDescriptorAndSignatureLoads) {
   const int refused = static_cast<int>(ErrorCode::kMapRefused);
   EXPECT_EQ(code({5, 201}), refused) << "a missing word past the end";
   EXPECT_EQ(code({5, 250, 260}), refused) << "a missing word in a gap";
+  EXPECT_EQ(code({198, 199, 200, 201}), refused) << "a missing word past the end of a dense range";
   EXPECT_EQ(code({200, 300}), refused) << "another dimension";
   EXPECT_EQ(code({6, 5}), static_cast<int>(ErrorCode::kInvalidArgument)) << "unsorted ids";
 

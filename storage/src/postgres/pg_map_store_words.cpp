@@ -105,14 +105,25 @@ void PgMapStore::loadFloatDescriptors(const std::vector<std::int64_t>& word_ids,
                                       float* rows, std::int64_t* created) const {
   if (!std::is_sorted(word_ids.begin(), word_ids.end()))
     throw StorageError(ErrorCode::kInvalidArgument, "loadFloatDescriptors: ids must be sorted");
-  const auto r = db_->run(
-      "SELECT id, created_frame, descriptor_type, dim, descriptor, checksum FROM words "
-      "WHERE id = ANY($1) ORDER BY id",
-      detail::PgParams().addArray(word_ids));
+  // Ids that fill most of their range (the words of a writer's working memory at its open: 95 %
+  // of it, fleet bench) are read as the range, rows in id order, and the others skipped here: an
+  // index probe each cost the server 2.2 us a word asked, the range 1.4.
+  const bool dense = !word_ids.empty() && word_ids.back() - word_ids.front() <
+                                              2 * static_cast<std::int64_t>(word_ids.size());
+  const auto r =
+      dense ? db_->run(
+                  "SELECT id, created_frame, descriptor_type, dim, descriptor, checksum FROM "
+                  "words WHERE id BETWEEN $1 AND $2 ORDER BY id",
+                  detail::PgParams().add(word_ids.front()).add(word_ids.back()))
+            : db_->run(
+                  "SELECT id, created_frame, descriptor_type, dim, descriptor, checksum FROM "
+                  "words WHERE id = ANY($1) ORDER BY id",
+                  detail::PgParams().addArray(word_ids));
   const std::size_t row_bytes = static_cast<std::size_t>(dim) * sizeof(float);
   int at = 0;
   for (std::size_t i = 0; i < word_ids.size(); ++i) {
     const std::int64_t id = word_ids[i];
+    while (at < r.rows() && r.integer(at, 0) < id) ++at;
     if (at >= r.rows() || r.integer(at, 0) != id)
       throw StorageError(ErrorCode::kMapRefused,
                          "map " + label_ + ": word " + std::to_string(id) + " is missing");
