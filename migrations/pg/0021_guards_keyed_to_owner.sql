@@ -24,14 +24,23 @@ AS $$
   FROM pg_class c WHERE c.oid = 'placedb_meta'::regclass
 $$;
 
--- The guards of this map's schema whose key is not the current owner's, as (name, table, def).
-CREATE FUNCTION placedb_unkeyed_guards() RETURNS TABLE (name name, rel regclass, def text)
+-- The guards of this map's schema whose key is not the current owner's, as (name, table, def,
+-- keyed_to): keyed_to is the role their condition names (read back from it, where the server
+-- prints the name as placedb_guard_key() writes it), NULL for a guard not keyed.
+CREATE FUNCTION placedb_unkeyed_guards()
+RETURNS TABLE (name name, rel regclass, def text, keyed_to name)
 LANGUAGE sql STABLE SET search_path FROM CURRENT AS $$
-  SELECT g.tgname, g.tgrelid::regclass, pg_get_triggerdef(g.oid)
-  FROM pg_trigger g JOIN pg_class c ON c.oid = g.tgrelid
-  WHERE c.relnamespace = (SELECT relnamespace FROM pg_class WHERE oid = 'placedb_meta'::regclass)
-    AND g.tgname IN ('placedb_guard_insert', 'placedb_guard_update', 'placedb_guard_delete')
-    AND position(placedb_guard_key() IN pg_get_triggerdef(g.oid)) = 0
+  SELECT g.tgname, g.rel, g.def,
+         replace(substring(g.def FROM
+                           $re$pg_has_role\(CURRENT_USER, '((?:[^']|'')*)'::name, 'MEMBER'::text\)$re$),
+                 '''''', '''')::name
+  FROM (SELECT t.tgname, t.tgrelid::regclass AS rel, pg_get_triggerdef(t.oid) AS def
+        FROM pg_trigger t JOIN pg_class c ON c.oid = t.tgrelid
+        WHERE c.relnamespace = (SELECT relnamespace FROM pg_class
+                                WHERE oid = 'placedb_meta'::regclass)
+          AND t.tgname IN ('placedb_guard_insert', 'placedb_guard_update', 'placedb_guard_delete'))
+       g
+  WHERE position(placedb_guard_key() IN g.def) = 0
   ORDER BY 2, 1
 $$;
 

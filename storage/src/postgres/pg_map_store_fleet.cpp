@@ -201,14 +201,11 @@ std::vector<SharedPlace> PgMapStore::placesAfter(
 void PgMapStore::refuseGuardsOfMissingRole() {
   // Guards still keyed to a role that no longer exists (the owner renamed or dropped, the owner's
   // writer not yet back) fail every write of another writer with the server's own "role does not
-  // exist": said here, before any write, with what fixes it. The role is read back from the
-  // guard's condition, where the server prints it as a literal (quotes doubled).
+  // exist": said here, before any write, with what fixes it.
   const auto r = db_->run(
-      "SELECT k.role, pg_get_userbyid(c.relowner) FROM (SELECT DISTINCT replace(substring(def "
-      "FROM $re$pg_has_role\\(CURRENT_USER, '((?:[^']|'')*)'::name$re$), '''''', '''') AS role "
-      "FROM placedb_unkeyed_guards()) k, pg_class c WHERE c.oid = 'placedb_meta'::regclass AND "
-      "k.role IS NOT NULL AND NOT EXISTS (SELECT 1 FROM pg_roles o WHERE o.rolname = k.role) "
-      "ORDER BY 1 LIMIT 1");
+      "SELECT g.keyed_to, pg_get_userbyid(c.relowner) FROM placedb_unkeyed_guards() g, pg_class c "
+      "WHERE c.oid = 'placedb_meta'::regclass AND g.keyed_to IS NOT NULL AND NOT EXISTS "
+      "(SELECT 1 FROM pg_roles o WHERE o.rolname = g.keyed_to) ORDER BY 1 LIMIT 1");
   if (r.rows() == 0) return;
   throw StorageError(ErrorCode::kMapRefused,
                      "map " + label_ + " refused: its guards are keyed to role " + r.text(0, 0) +
